@@ -1,0 +1,179 @@
+//! Spring–dashpot–Coulomb resistance with history (PHYSICS §2.2), shared by sliding
+//! friction, rolling resistance and torsion resistance.
+
+use super::normal::Damping;
+use glam::DVec3;
+use serde::{Deserialize, Serialize};
+
+/// Parameters of one spring–dashpot–Coulomb resistance.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Resistance {
+    /// Spring stiffness (N/m).
+    pub stiffness: f64,
+    /// Dashpot coefficient (kg/s) as a function of the reduced mass.
+    pub damping: Damping,
+    /// Static Coulomb coefficient: the spring slips when `|f| > μ_s f_rep`.
+    pub mu_static: f64,
+    /// Dynamic Coulomb coefficient: a slipping contact carries `μ_d f_rep`.
+    pub mu_dynamic: f64,
+}
+
+impl Resistance {
+    /// A resistance that never acts.
+    pub const NONE: Resistance = Resistance {
+        stiffness: 0.0,
+        damping: Damping::NONE,
+        mu_static: 0.0,
+        mu_dynamic: 0.0,
+    };
+
+    /// Whether this resistance can ever produce a force: it needs a spring or a dashpot
+    /// and a non-zero Coulomb limit.
+    pub fn is_active(&self) -> bool {
+        (self.stiffness > 0.0 || !self.damping.is_zero()) && self.mu_static > 0.0
+    }
+
+    /// Advances a spring `xi` (m) that lives in the tangent plane of a contact with unit
+    /// normal `n` (sliding and rolling), driven by the relative velocity `v` (m/s, in the
+    /// tangent plane) over `dt` (s); returns the force (N) and whether the contact slips.
+    ///
+    /// The spring is first rotated into the current tangent plane keeping its length, then
+    /// stretched by `v dt`. `gamma` is the dashpot coefficient of this pair (kg/s) and
+    /// `f_rep ≥ 0` the repulsive normal force (N) that sets the Coulomb limits.
+    #[inline]
+    pub fn update_in_plane(
+        &self,
+        xi: &mut DVec3,
+        n: DVec3,
+        v: DVec3,
+        gamma: f64,
+        f_rep: f64,
+        dt: f64,
+    ) -> (DVec3, bool) {
+        rotate_into_plane(xi, n);
+        self.stretch_and_cap(xi, v, gamma, f_rep, dt)
+    }
+
+    /// Like [`Resistance::update_in_plane`] for a spring that lives along the normal `n`
+    /// (torsion): the spring is first turned onto the current normal keeping its length and
+    /// sense, then stretched by `v dt` (`v` along `n`).
+    #[inline]
+    pub fn update_along_normal(
+        &self,
+        xi: &mut DVec3,
+        n: DVec3,
+        v: DVec3,
+        gamma: f64,
+        f_rep: f64,
+        dt: f64,
+    ) -> (DVec3, bool) {
+        let len = xi.length();
+        *xi = if n.dot(*xi) < 0.0 { -len * n } else { len * n };
+        self.stretch_and_cap(xi, v, gamma, f_rep, dt)
+    }
+
+    /// Stretches the spring by `v dt`, forms the trial force `−k ξ − γ v` and caps it at
+    /// `μ_s f_rep`: a slipping contact carries `μ_d f_rep` along the trial direction and its
+    /// spring is reset to match, `ξ = −(f + γ v)/k`.
+    #[inline]
+    fn stretch_and_cap(
+        &self,
+        xi: &mut DVec3,
+        v: DVec3,
+        gamma: f64,
+        f_rep: f64,
+        dt: f64,
+    ) -> (DVec3, bool) {
+        *xi += v * dt;
+        let trial = -self.stiffness * *xi - gamma * v;
+        let limit = self.mu_static * f_rep;
+        let t2 = trial.length_squared();
+        if t2 > limit * limit {
+            let force = trial * (self.mu_dynamic * f_rep / t2.sqrt());
+            *xi = if self.stiffness > 0.0 {
+                -(force + gamma * v) / self.stiffness
+            } else {
+                DVec3::ZERO
+            };
+            (force, true)
+        } else {
+            (trial, false)
+        }
+    }
+}
+
+/// Removes the normal component of `xi` and restores its length.
+#[inline]
+fn rotate_into_plane(xi: &mut DVec3, n: DVec3) {
+    let len2 = xi.length_squared();
+    if len2 == 0.0 {
+        return;
+    }
+    let t = *xi - n * n.dot(*xi);
+    let t2 = t.length_squared();
+    *xi = if t2 > 0.0 {
+        t * (len2 / t2).sqrt()
+    } else {
+        DVec3::ZERO
+    };
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn friction(mu: f64) -> Resistance {
+        Resistance {
+            stiffness: 10.0,
+            damping: Damping::NONE,
+            mu_static: mu,
+            mu_dynamic: mu,
+        }
+    }
+
+    #[test]
+    fn spring_follows_hooke_below_the_limit() {
+        let mut xi = DVec3::ZERO;
+        let (f, slip) = friction(1.0).update_in_plane(&mut xi, DVec3::Z, DVec3::X, 0.0, 100.0, 0.1);
+        assert!(!slip);
+        assert_eq!(xi, DVec3::new(0.1, 0.0, 0.0));
+        assert_eq!(f, DVec3::new(-1.0, 0.0, 0.0));
+    }
+
+    #[test]
+    fn slip_caps_force_and_resets_spring() {
+        let mut xi = DVec3::new(1.0, 0.0, 0.0);
+        let (f, slip) = friction(0.5).update_in_plane(&mut xi, DVec3::Z, DVec3::X, 0.0, 2.0, 0.1);
+        assert!(slip);
+        assert!((f.length() - 1.0).abs() < 1e-15);
+        assert!((-10.0 * xi - f).length() < 1e-15);
+    }
+
+    #[test]
+    fn rotation_keeps_spring_length_in_new_plane() {
+        let mut xi = DVec3::new(3.0, 0.0, 4.0);
+        rotate_into_plane(&mut xi, DVec3::Z);
+        assert!((xi - DVec3::new(5.0, 0.0, 0.0)).length() < 1e-14);
+    }
+}
+
+#[cfg(test)]
+mod torsion_tests {
+    use super::*;
+
+    #[test]
+    fn normal_spring_follows_the_normal() {
+        let r = Resistance {
+            stiffness: 1.0,
+            damping: Damping::NONE,
+            mu_static: 10.0,
+            mu_dynamic: 10.0,
+        };
+        // A spring pointing against a new normal keeps its length and its sense.
+        let mut xi = DVec3::new(-1.2, 1.6, 0.0);
+        let (f, slip) = r.update_along_normal(&mut xi, DVec3::X, DVec3::ZERO, 0.0, 1.0, 0.1);
+        assert!(!slip);
+        assert!((xi - DVec3::new(-2.0, 0.0, 0.0)).length() < 1e-15);
+        assert_eq!(f, -xi);
+    }
+}

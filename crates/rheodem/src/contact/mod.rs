@@ -1,0 +1,206 @@
+//! Contact laws between two spheres (PHYSICS §2).
+//!
+//! A [`ContactLaw`] combines independent parts: the linear visco-elastic [`NormalLaw`] and
+//! three spring–dashpot–Coulomb [`Resistance`]s (sliding, rolling, torsion). Per-contact
+//! state lives in one [`ContactHistory`] record. [`ContactLaw::evaluate`] is the single
+//! pair kernel used by the force loop for particle pairs and for planar walls alike.
+//! Sign convention: `n` points from the second particle `j` to the first `i`; the returned
+//! force acts on `i`, and `−force` on `j`.
+
+pub mod friction;
+pub mod normal;
+
+use glam::DVec3;
+use serde::{Deserialize, Serialize};
+
+pub use friction::Resistance;
+pub use normal::{Damping, NormalLaw};
+
+/// The full contact law of one species pair.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ContactLaw {
+    /// Linear visco-elastic normal force.
+    pub normal: NormalLaw,
+    /// Sliding friction (stiffness `k_t` in N/m).
+    pub tangential: Resistance,
+    /// Rolling resistance (stiffness `k_r` in N/m, acting on the rolling displacement).
+    pub rolling: Resistance,
+    /// Torsion resistance (stiffness `k_o` in N/m, acting on the torsional displacement).
+    pub torsion: Resistance,
+}
+
+/// Per-contact history: the three springs (m). Reset to zero when the contact opens.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct ContactHistory {
+    /// Tangential (sliding) spring `ξ_t`.
+    pub tangential: DVec3,
+    /// Rolling spring `ξ_r`.
+    pub rolling: DVec3,
+    /// Torsion spring `ξ_o` (along the normal).
+    pub torsion: DVec3,
+}
+
+impl ContactHistory {
+    /// The same history seen from the other particle (pair order `j, i`). The sliding and
+    /// torsion springs change sign with the pair order; the rolling spring does not (its
+    /// velocity `−a'(ω_i − ω_j) × n` is symmetric).
+    pub fn flipped(&self) -> ContactHistory {
+        ContactHistory {
+            tangential: -self.tangential,
+            rolling: self.rolling,
+            torsion: -self.torsion,
+        }
+    }
+}
+
+/// Relative state of two spheres in contact, as seen from `i`.
+#[derive(Clone, Copy, Debug)]
+pub struct PairKinematics {
+    /// Unit normal from `j` to `i`.
+    pub normal: DVec3,
+    /// Overlap `δ = a_i + a_j − |r_i − r_j|` (m).
+    pub overlap: f64,
+    /// Radius of `i` (m).
+    pub radius_i: f64,
+    /// Radius of `j` (m); for a planar wall, `f64::INFINITY`.
+    pub radius_j: f64,
+    /// `v_i − v_j` (m/s).
+    pub velocity: DVec3,
+    /// Angular velocity of `i` (rad/s).
+    pub omega_i: DVec3,
+    /// Angular velocity of `j` (rad/s).
+    pub omega_j: DVec3,
+    /// Reduced mass `m_ij = 1/(1/m_i + 1/m_j)` (kg); a prescribed particle is infinitely heavy.
+    pub reduced_mass: f64,
+}
+
+/// Result of a pair evaluation.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct PairForce {
+    /// Force on `i` (N); `j` receives its negative.
+    pub force: DVec3,
+    /// Torque on `i` (N m).
+    pub torque_i: DVec3,
+    /// Torque on `j` (N m).
+    pub torque_j: DVec3,
+    /// Repulsive normal force `k_n δ + γ_n δ̇` (N), the reference of the Coulomb limits.
+    pub repulsive: f64,
+    /// Whether the sliding spring slipped this step.
+    pub sliding: bool,
+}
+
+impl ContactLaw {
+    /// Evaluates the contact of a touching pair (`overlap > 0`) and advances its history
+    /// over `dt` (s).
+    #[inline]
+    pub fn evaluate(&self, k: &PairKinematics, h: &mut ContactHistory, dt: f64) -> PairForce {
+        let n = k.normal;
+        let lever_i = k.radius_i - 0.5 * k.overlap;
+        let lever_j = k.radius_j - 0.5 * k.overlap;
+        // Relative velocity of the two surfaces at the contact point (middle of the overlap).
+        let spin = if lever_j.is_finite() {
+            lever_i * k.omega_i + lever_j * k.omega_j
+        } else {
+            lever_i * k.omega_i
+        };
+        let v_contact = k.velocity - spin.cross(n);
+        let overlap_rate = -k.velocity.dot(n);
+        let gamma_n = self.normal.damping.coefficient(k.reduced_mass);
+        let f_rep = self.normal.force(k.overlap, overlap_rate, gamma_n);
+        let limit_ref = f_rep.abs();
+
+        let mut out = PairForce {
+            force: n * f_rep,
+            repulsive: f_rep,
+            ..PairForce::default()
+        };
+
+        if self.tangential.is_active() {
+            let v_t = v_contact - n * n.dot(v_contact);
+            let gamma_t = self.tangential.damping.coefficient(k.reduced_mass);
+            let (f_t, slip) =
+                self.tangential
+                    .update_in_plane(&mut h.tangential, n, v_t, gamma_t, limit_ref, dt);
+            let arm = n.cross(f_t);
+            out.force += f_t;
+            out.torque_i -= lever_i * arm;
+            if lever_j.is_finite() {
+                out.torque_j -= lever_j * arm;
+            }
+            out.sliding = slip;
+        }
+
+        if self.rolling.is_active() || self.torsion.is_active() {
+            let a_eff = if k.radius_j.is_finite() {
+                k.radius_i * k.radius_j / (k.radius_i + k.radius_j)
+            } else {
+                k.radius_i
+            };
+            let w_rel = k.omega_i - k.omega_j;
+            if self.rolling.is_active() {
+                let v_r = -a_eff * w_rel.cross(n);
+                let gamma_r = self.rolling.damping.coefficient(k.reduced_mass);
+                let (f_r, _) = self
+                    .rolling
+                    .update_in_plane(&mut h.rolling, n, v_r, gamma_r, limit_ref, dt);
+                let t = -a_eff * n.cross(f_r);
+                out.torque_i += t;
+                out.torque_j -= t;
+            }
+            if self.torsion.is_active() {
+                let v_o = a_eff * w_rel.dot(n) * n;
+                let gamma_o = self.torsion.damping.coefficient(k.reduced_mass);
+                let (f_o, _) =
+                    self.torsion
+                        .update_along_normal(&mut h.torsion, n, v_o, gamma_o, limit_ref, dt);
+                let t = a_eff * f_o;
+                out.torque_i += t;
+                out.torque_j -= t;
+            }
+        }
+        out
+    }
+
+    /// Elastic energy stored in a contact (J): `½ k_n δ² + ½ k_t |ξ_t|² + ½ k_r |ξ_r|²
+    /// + ½ k_o |ξ_o|²`.
+    pub fn elastic_energy(&self, overlap: f64, h: &ContactHistory) -> f64 {
+        0.5 * (self.normal.stiffness * overlap * overlap
+            + self.tangential.stiffness * h.tangential.length_squared()
+            + self.rolling.stiffness * h.rolling.length_squared()
+            + self.torsion.stiffness * h.torsion.length_squared())
+    }
+}
+
+/// Contact laws of every species pair, `n_species × n_species`, symmetric.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ContactTable {
+    species: usize,
+    laws: Vec<ContactLaw>,
+}
+
+impl ContactTable {
+    /// A table where every pair of the `species` species uses `law`.
+    pub fn uniform(species: usize, law: ContactLaw) -> ContactTable {
+        ContactTable {
+            species,
+            laws: vec![law; species * species],
+        }
+    }
+
+    /// Number of species.
+    pub fn species(&self) -> usize {
+        self.species
+    }
+
+    /// Sets the law of the pair `(a, b)` (and `(b, a)`).
+    pub fn set(&mut self, a: usize, b: usize, law: ContactLaw) {
+        self.laws[a * self.species + b] = law;
+        self.laws[b * self.species + a] = law;
+    }
+
+    /// The law of the pair `(a, b)`.
+    #[inline]
+    pub fn get(&self, a: u16, b: u16) -> &ContactLaw {
+        &self.laws[a as usize * self.species + b as usize]
+    }
+}

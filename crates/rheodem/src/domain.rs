@@ -1,0 +1,197 @@
+//! The simulation box: its extent, which axes are periodic, and the periodic images.
+//!
+//! A pair that interacts across a periodic boundary is stored in the neighbour list with an
+//! *image code*: which copy of the second particle it sees. The code is fixed between list
+//! builds while the geometric transformation it stands for may change every step (a box that
+//! is compressed now; a Lees-Edwards shift or a rotated wedge image later). The force loop
+//! asks the domain for the current [`ImageTransform`] of every code once per step.
+
+use glam::{DMat3, DVec3};
+use serde::{Deserialize, Serialize};
+
+/// Number of image codes: one for each of the 3×3×3 neighbouring copies of the box.
+pub const IMAGE_COUNT: usize = 27;
+/// The image code of the particle itself (no shift).
+pub const IDENTITY_IMAGE: u8 = 13;
+
+/// Packs the cell offsets `(cx, cy, cz)`, each in `{-1, 0, 1}`, into an image code.
+#[inline]
+pub fn image_code(c: [i32; 3]) -> u8 {
+    ((c[0] + 1) + 3 * (c[1] + 1) + 9 * (c[2] + 1)) as u8
+}
+
+/// Unpacks an image code into its cell offsets.
+#[inline]
+pub fn image_offsets(code: u8) -> [i32; 3] {
+    let c = code as i32;
+    [c % 3 - 1, (c / 3) % 3 - 1, c / 9 - 1]
+}
+
+/// How to map a particle onto one of its periodic images: `r' = R r + shift`,
+/// `v' = R v + velocity_shift`, `ω' = R ω`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ImageTransform {
+    /// Rotation `R`; `None` for a pure translation (the common case, kept cheap).
+    pub rotation: Option<DMat3>,
+    /// Translation added to positions (m).
+    pub shift: DVec3,
+    /// Velocity added to velocities (m/s).
+    pub velocity_shift: DVec3,
+}
+
+impl ImageTransform {
+    /// The identity transformation.
+    pub const IDENTITY: ImageTransform = ImageTransform {
+        rotation: None,
+        shift: DVec3::ZERO,
+        velocity_shift: DVec3::ZERO,
+    };
+
+    /// Image of a position (m).
+    #[inline]
+    pub fn position(&self, r: DVec3) -> DVec3 {
+        match self.rotation {
+            None => r + self.shift,
+            Some(m) => m * r + self.shift,
+        }
+    }
+
+    /// Image of a velocity (m/s).
+    #[inline]
+    pub fn velocity(&self, v: DVec3) -> DVec3 {
+        match self.rotation {
+            None => v + self.velocity_shift,
+            Some(m) => m * v + self.velocity_shift,
+        }
+    }
+
+    /// Image of an angular velocity (rad/s).
+    #[inline]
+    pub fn angular_velocity(&self, w: DVec3) -> DVec3 {
+        match self.rotation {
+            None => w,
+            Some(m) => m * w,
+        }
+    }
+}
+
+/// An axis-aligned box `[lo, hi]` with per-axis periodicity.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Domain {
+    /// Lower corner (m).
+    pub lo: DVec3,
+    /// Upper corner (m).
+    pub hi: DVec3,
+    /// Which of `x`, `y`, `z` are periodic.
+    pub periodic: [bool; 3],
+}
+
+impl Domain {
+    /// Box edge lengths (m).
+    #[inline]
+    pub fn lengths(&self) -> DVec3 {
+        self.hi - self.lo
+    }
+
+    /// Box volume (m³).
+    pub fn volume(&self) -> f64 {
+        let l = self.lengths();
+        l.x * l.y * l.z
+    }
+
+    /// The current transformation of every image code.
+    pub fn image_transforms(&self) -> [ImageTransform; IMAGE_COUNT] {
+        let l = self.lengths();
+        std::array::from_fn(|code| {
+            let c = image_offsets(code as u8);
+            ImageTransform {
+                rotation: None,
+                shift: DVec3::new(c[0] as f64 * l.x, c[1] as f64 * l.y, c[2] as f64 * l.z),
+                velocity_shift: DVec3::ZERO,
+            }
+        })
+    }
+
+    /// Largest change of any image's position shift between two sets of transforms (m):
+    /// how much a pair's separation can change through the boundary alone.
+    pub fn image_drift(a: &[ImageTransform; IMAGE_COUNT], b: &[ImageTransform; IMAGE_COUNT]) -> f64 {
+        a.iter()
+            .zip(b)
+            .map(|(x, y)| (x.shift - y.shift).length())
+            .fold(0.0, f64::max)
+    }
+
+    /// Maps a particle back into the primary box along its periodic axes.
+    pub fn wrap(&self, position: &mut DVec3, _velocity: &mut DVec3) {
+        let l = self.lengths();
+        for axis in 0..3 {
+            if self.periodic[axis] {
+                let x = position[axis];
+                if x < self.lo[axis] || x >= self.hi[axis] {
+                    let k = ((x - self.lo[axis]) / l[axis]).floor();
+                    let mut w = x - k * l[axis];
+                    if w >= self.hi[axis] {
+                        w -= l[axis];
+                    }
+                    if w < self.lo[axis] {
+                        w = self.lo[axis];
+                    }
+                    position[axis] = w;
+                }
+            }
+        }
+    }
+
+    /// Scales the box about its lower corner by `factor` along every periodic axis and maps
+    /// positions affinely with it (used to compress a packing).
+    pub fn scale_affine(&mut self, factor: f64, positions: &mut [DVec3]) {
+        let s = DVec3::new(
+            if self.periodic[0] { factor } else { 1.0 },
+            if self.periodic[1] { factor } else { 1.0 },
+            if self.periodic[2] { factor } else { 1.0 },
+        );
+        for r in positions.iter_mut() {
+            *r = self.lo + (*r - self.lo) * s;
+        }
+        self.hi = self.lo + self.lengths() * s;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn cube() -> Domain {
+        Domain {
+            lo: DVec3::ZERO,
+            hi: DVec3::splat(2.0),
+            periodic: [true, true, false],
+        }
+    }
+
+    #[test]
+    fn image_codes_round_trip() {
+        for code in 0..IMAGE_COUNT as u8 {
+            assert_eq!(image_code(image_offsets(code)), code);
+        }
+        assert_eq!(image_offsets(IDENTITY_IMAGE), [0, 0, 0]);
+    }
+
+    #[test]
+    fn wrap_only_periodic_axes() {
+        let d = cube();
+        let mut r = DVec3::new(-0.5, 4.5, 3.0);
+        let mut v = DVec3::ZERO;
+        d.wrap(&mut r, &mut v);
+        assert_eq!(r, DVec3::new(1.5, 0.5, 3.0));
+    }
+
+    #[test]
+    fn image_shift_matches_code() {
+        let d = cube();
+        let t = d.image_transforms();
+        let code = image_code([1, -1, 0]);
+        assert_eq!(t[code as usize].position(DVec3::ZERO), DVec3::new(2.0, -2.0, 0.0));
+        assert_eq!(t[IDENTITY_IMAGE as usize], ImageTransform::IDENTITY);
+    }
+}

@@ -1,0 +1,364 @@
+//! Neighbour search: linked cells feeding a Verlet list with a skin.
+//!
+//! The list is a *half* list in compressed-row form: for each particle slot `i`, the
+//! partners `j > i` within `a_i + a_j + range + skin`, each with the image code of `j`
+//! (see [`crate::domain`]). Contact history lives beside the pairs and is keyed by the
+//! particles' permanent ids when the list is rebuilt, so it survives rebuilds and the
+//! re-sorting of particles by cell that every rebuild performs for memory locality.
+//!
+//! A rebuild is due when two particles could have closed the skin since the last build:
+//! when the two largest displacements plus the largest change of any image shift exceed
+//! the skin.
+
+use crate::contact::ContactHistory;
+use crate::domain::{Domain, IDENTITY_IMAGE, IMAGE_COUNT, ImageTransform, image_code};
+use crate::particles::Particles;
+use glam::DVec3;
+use rustc_hash::FxHashMap;
+use serde::{Deserialize, Serialize};
+
+/// Errors of the neighbour search.
+#[derive(Debug, thiserror::Error, PartialEq)]
+pub enum NeighborError {
+    /// A periodic axis is shorter than three interaction cutoffs.
+    #[error(
+        "the box is too small along periodic axis {axis}: length {length:.6e} m must be at least \
+         3 × the neighbour cutoff ({cutoff:.6e} m = largest diameter + interaction range + skin)"
+    )]
+    BoxTooSmall {
+        /// Axis name (`x`, `y`, `z`).
+        axis: char,
+        /// Box length along it (m).
+        length: f64,
+        /// The neighbour cutoff (m).
+        cutoff: f64,
+    },
+}
+
+/// Verlet list with contact history.
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
+pub struct NeighborList {
+    /// Skin distance added to every cutoff (m).
+    pub skin: f64,
+    /// Interaction range beyond contact kept in the list (m); zero for contact-only laws.
+    pub range: f64,
+    offsets: Vec<u32>,
+    partner: Vec<u32>,
+    image: Vec<u8>,
+    touching: Vec<bool>,
+    history: Vec<ContactHistory>,
+    reference_position: Vec<DVec3>,
+    reference_shift: Vec<DVec3>,
+    /// Number of builds so far.
+    pub builds: u64,
+}
+
+/// Read-only and mutable views of the list used by the force loop.
+pub struct PairSlices<'a> {
+    /// Row offsets: the pairs of slot `i` are `offsets[i]..offsets[i + 1]`.
+    pub offsets: &'a [u32],
+    /// Partner slot `j` of each pair.
+    pub partner: &'a [u32],
+    /// Image code of `j` for each pair.
+    pub image: &'a [u8],
+    /// Whether each pair carries live contact history.
+    pub touching: &'a mut [bool],
+    /// Contact history of each pair.
+    pub history: &'a mut [ContactHistory],
+}
+
+impl NeighborList {
+    /// An empty list with the given skin and interaction range (m); it builds on first use.
+    pub fn new(skin: f64, range: f64) -> NeighborList {
+        NeighborList {
+            skin,
+            range,
+            ..NeighborList::default()
+        }
+    }
+
+    /// Number of pairs in the list.
+    pub fn len(&self) -> usize {
+        self.partner.len()
+    }
+
+    /// Whether the list has no pairs.
+    pub fn is_empty(&self) -> bool {
+        self.partner.is_empty()
+    }
+
+    /// Views for the force loop.
+    pub fn slices(&mut self) -> PairSlices<'_> {
+        PairSlices {
+            offsets: &self.offsets,
+            partner: &self.partner,
+            image: &self.image,
+            touching: &mut self.touching,
+            history: &mut self.history,
+        }
+    }
+
+    /// Whether the list must be rebuilt before the next force evaluation.
+    pub fn needs_rebuild(&self, particles: &Particles, images: &[ImageTransform; IMAGE_COUNT]) -> bool {
+        if self.reference_position.len() != particles.len() {
+            return true;
+        }
+        let (mut first, mut second) = (0.0f64, 0.0f64);
+        for (r, r0) in particles.position.iter().zip(&self.reference_position) {
+            let d = (*r - *r0).length_squared();
+            if d > second {
+                if d > first {
+                    second = first;
+                    first = d;
+                } else {
+                    second = d;
+                }
+            }
+        }
+        let drift = self
+            .reference_shift
+            .iter()
+            .zip(images.iter())
+            .map(|(s0, t)| (t.shift - *s0).length())
+            .fold(0.0, f64::max);
+        first.sqrt() + second.sqrt() + drift >= self.skin
+    }
+
+    /// Rebuilds the list: wraps positions into the box, re-sorts particles by cell, finds all
+    /// pairs within cutoff and carries the contact history over by particle id.
+    pub fn build(&mut self, particles: &mut Particles, domain: &Domain) -> Result<(), NeighborError> {
+        let old = self.history_by_id(particles);
+
+        for (r, v) in particles.position.iter_mut().zip(particles.velocity.iter_mut()) {
+            domain.wrap(r, v);
+        }
+
+        let a_max = particles.radius.iter().copied().fold(0.0, f64::max);
+        let cutoff = 2.0 * a_max + self.range + self.skin;
+        let grid = CellGrid::new(domain, cutoff)?;
+
+        // Stable counting sort by cell: deterministic, and neighbours end up close in memory.
+        let cell_of: Vec<u32> = particles.position.iter().map(|r| grid.cell_index(*r)).collect();
+        let mut start = vec![0u32; grid.count() + 1];
+        for &c in &cell_of {
+            start[c as usize + 1] += 1;
+        }
+        for c in 0..grid.count() {
+            start[c + 1] += start[c];
+        }
+        let mut fill = start.clone();
+        let mut order = vec![0u32; particles.len()];
+        for (slot, &c) in cell_of.iter().enumerate() {
+            order[fill[c as usize] as usize] = slot as u32;
+            fill[c as usize] += 1;
+        }
+        particles.permute(&order);
+
+        self.find_pairs(particles, &grid, &start);
+
+        self.touching = vec![false; self.partner.len()];
+        self.history = vec![ContactHistory::default(); self.partner.len()];
+        if !old.is_empty() {
+            for i in 0..particles.len() {
+                let id_i = particles.id[i];
+                for k in self.offsets[i] as usize..self.offsets[i + 1] as usize {
+                    let id_j = particles.id[self.partner[k] as usize];
+                    let found = if id_i < id_j {
+                        old.get(&(id_i, id_j)).copied()
+                    } else {
+                        old.get(&(id_j, id_i)).map(ContactHistory::flipped)
+                    };
+                    if let Some(h) = found {
+                        self.touching[k] = true;
+                        self.history[k] = h;
+                    }
+                }
+            }
+        }
+
+        self.reference_position = particles.position.clone();
+        self.reference_shift = domain.image_transforms().iter().map(|t| t.shift).collect();
+        self.builds += 1;
+        Ok(())
+    }
+
+    /// Live contact histories keyed by `(lower id, higher id)`, oriented from the lower id.
+    fn history_by_id(&self, particles: &Particles) -> FxHashMap<(u32, u32), ContactHistory> {
+        let mut map = FxHashMap::default();
+        if self.offsets.len() != particles.len() + 1 {
+            return map;
+        }
+        for i in 0..particles.len() {
+            let id_i = particles.id[i];
+            for k in self.offsets[i] as usize..self.offsets[i + 1] as usize {
+                if !self.touching[k] {
+                    continue;
+                }
+                let id_j = particles.id[self.partner[k] as usize];
+                let h = self.history[k];
+                if id_i < id_j {
+                    map.insert((id_i, id_j), h);
+                } else {
+                    map.insert((id_j, id_i), h.flipped());
+                }
+            }
+        }
+        map
+    }
+
+    fn find_pairs(&mut self, particles: &Particles, grid: &CellGrid, start: &[u32]) {
+        let n = particles.len();
+        self.offsets.clear();
+        self.partner.clear();
+        self.image.clear();
+        self.offsets.reserve(n + 1);
+        self.offsets.push(0);
+        let pos = &particles.position;
+        let rad = &particles.radius;
+        let free: Vec<bool> = particles.motion.iter().map(|m| m.is_free()).collect();
+        let reach = self.range + self.skin;
+        let lengths = grid.lengths;
+        for i in 0..n {
+            let ci = grid.cell_coords(pos[i]);
+            for dz in -1..=1 {
+                for dy in -1..=1 {
+                    for dx in -1..=1 {
+                        let Some((cell, img)) = grid.neighbor(ci, [dx, dy, dz]) else {
+                            continue;
+                        };
+                        let shift = DVec3::new(
+                            img[0] as f64 * lengths.x,
+                            img[1] as f64 * lengths.y,
+                            img[2] as f64 * lengths.z,
+                        );
+                        let code = image_code(img);
+                        let (lo, hi) = (start[cell] as usize, start[cell + 1] as usize);
+                        for j in lo.max(i + 1)..hi.max(i + 1) {
+                            if !free[i] && !free[j] {
+                                continue;
+                            }
+                            let cut = rad[i] + rad[j] + reach;
+                            let d = pos[i] - (pos[j] + shift);
+                            if d.length_squared() < cut * cut {
+                                self.partner.push(j as u32);
+                                self.image.push(code);
+                            }
+                        }
+                    }
+                }
+            }
+            // Partners sorted by slot for a predictable memory walk.
+            let row = *self.offsets.last().unwrap_or(&0) as usize;
+            let mut pairs: Vec<(u32, u8)> = self.partner[row..]
+                .iter()
+                .copied()
+                .zip(self.image[row..].iter().copied())
+                .collect();
+            pairs.sort_unstable();
+            for (k, (j, c)) in pairs.into_iter().enumerate() {
+                self.partner[row + k] = j;
+                self.image[row + k] = c;
+            }
+            self.offsets.push(self.partner.len() as u32);
+        }
+    }
+
+    /// Splits the slots `0..n` into `chunks` contiguous ranges with about equal pair counts;
+    /// returns the `chunks + 1` boundaries.
+    pub fn chunk_bounds(&self, chunks: usize) -> Vec<usize> {
+        let n = self.offsets.len().saturating_sub(1);
+        let total = self.partner.len() + n;
+        let mut bounds = Vec::with_capacity(chunks + 1);
+        bounds.push(0);
+        for c in 1..chunks {
+            let target = total * c / chunks;
+            // First slot whose cumulative work (pairs + particles before it) reaches the target.
+            let (mut lo, mut hi) = (0usize, n);
+            while lo < hi {
+                let mid = (lo + hi) / 2;
+                if self.offsets[mid] as usize + mid < target {
+                    lo = mid + 1;
+                } else {
+                    hi = mid;
+                }
+            }
+            bounds.push(lo.max(bounds[c - 1]));
+        }
+        bounds.push(n);
+        bounds
+    }
+
+    /// Whether any pair crosses a periodic boundary (image code other than identity).
+    pub fn has_images(&self) -> bool {
+        self.image.iter().any(|&c| c != IDENTITY_IMAGE)
+    }
+}
+
+/// Linked-cell grid over the box.
+struct CellGrid {
+    lo: DVec3,
+    lengths: DVec3,
+    dims: [usize; 3],
+    periodic: [bool; 3],
+}
+
+impl CellGrid {
+    fn new(domain: &Domain, cutoff: f64) -> Result<CellGrid, NeighborError> {
+        let lengths = domain.lengths();
+        let mut dims = [1usize; 3];
+        for axis in 0..3 {
+            let n = (lengths[axis] / cutoff).floor().max(1.0) as usize;
+            if domain.periodic[axis] && n < 3 {
+                return Err(NeighborError::BoxTooSmall {
+                    axis: ['x', 'y', 'z'][axis],
+                    length: lengths[axis],
+                    cutoff,
+                });
+            }
+            // Bounded so that a huge box with tiny particles cannot exhaust memory.
+            dims[axis] = n.min(1 << 10);
+        }
+        Ok(CellGrid {
+            lo: domain.lo,
+            lengths,
+            dims,
+            periodic: domain.periodic,
+        })
+    }
+
+    fn count(&self) -> usize {
+        self.dims[0] * self.dims[1] * self.dims[2]
+    }
+
+    fn cell_coords(&self, r: DVec3) -> [i64; 3] {
+        std::array::from_fn(|a| {
+            let c = ((r[a] - self.lo[a]) / self.lengths[a] * self.dims[a] as f64).floor();
+            (c.max(0.0) as i64).min(self.dims[a] as i64 - 1)
+        })
+    }
+
+    fn cell_index(&self, r: DVec3) -> u32 {
+        let c = self.cell_coords(r);
+        (c[0] as usize + self.dims[0] * (c[1] as usize + self.dims[1] * c[2] as usize)) as u32
+    }
+
+    /// The cell at offset `d` from `c`, wrapped through periodic axes, with the image offset
+    /// of the wrap; `None` past a non-periodic edge.
+    fn neighbor(&self, c: [i64; 3], d: [i32; 3]) -> Option<(usize, [i32; 3])> {
+        let mut img = [0i32; 3];
+        let mut cc = [0usize; 3];
+        for a in 0..3 {
+            let n = self.dims[a] as i64;
+            let mut x = c[a] + d[a] as i64;
+            if x < 0 || x >= n {
+                if !self.periodic[a] {
+                    return None;
+                }
+                img[a] = if x < 0 { -1 } else { 1 };
+                x -= img[a] as i64 * n;
+            }
+            cc[a] = x as usize;
+        }
+        Some((cc[0] + self.dims[0] * (cc[1] + self.dims[1] * cc[2]), img))
+    }
+}

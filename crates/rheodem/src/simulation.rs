@@ -1,0 +1,167 @@
+//! The simulation state and its time step.
+//!
+//! [`Simulation`] holds everything a run depends on — particles (in their current sorted
+//! order), box, contact laws, walls, neighbour list with contact history, time — so that
+//! serialising it is a complete checkpoint and stepping it is a pure function of it.
+
+use crate::contact::ContactTable;
+use crate::domain::Domain;
+use crate::forces::{ForceScratch, pair_forces};
+use crate::integrate::{add_gravity, drift, kick};
+use crate::measure::{
+    ContactSums, Observables, kinetic_energies, kinetic_stress_sum, to_rows,
+};
+use crate::neighbor::{NeighborError, NeighborList};
+use crate::particles::Particles;
+use crate::walls::PlaneWall;
+use glam::DVec3;
+use serde::{Deserialize, Serialize};
+
+/// A DEM simulation.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct Simulation {
+    /// The particles.
+    pub particles: Particles,
+    /// The box and its boundaries.
+    pub domain: Domain,
+    /// Contact laws per species pair.
+    pub laws: ContactTable,
+    /// Planar walls.
+    pub walls: Vec<PlaneWall>,
+    /// Verlet list and contact history.
+    pub neighbors: NeighborList,
+    /// Gravitational acceleration (m/s²).
+    pub gravity: DVec3,
+    /// Time step (s).
+    pub dt: f64,
+    /// Simulated time (s).
+    pub time: f64,
+    /// Steps taken.
+    pub step: u64,
+    /// Contact sums of the last measuring force evaluation and its step.
+    measured: (u64, ContactSums),
+    #[serde(skip)]
+    scratch: ForceScratch,
+}
+
+impl Simulation {
+    /// Assembles a simulation and evaluates the initial forces. `skin` (m) is the Verlet
+    /// skin and `range` (m) the interaction range of the contact laws beyond contact.
+    #[allow(clippy::too_many_arguments)]
+    pub fn new(
+        particles: Particles,
+        domain: Domain,
+        laws: ContactTable,
+        walls: Vec<PlaneWall>,
+        gravity: DVec3,
+        dt: f64,
+        skin: f64,
+        range: f64,
+    ) -> Result<Simulation, NeighborError> {
+        let mut sim = Simulation {
+            particles,
+            domain,
+            laws,
+            walls,
+            neighbors: NeighborList::new(skin, range),
+            gravity,
+            dt,
+            time: 0.0,
+            step: 0,
+            measured: (0, ContactSums::default()),
+            scratch: ForceScratch::default(),
+        };
+        // Give prescribed particles the velocities of their motion law.
+        drift(&mut sim.particles, 0.0);
+        sim.neighbors.build(&mut sim.particles, &sim.domain)?;
+        sim.compute_forces(true);
+        Ok(sim)
+    }
+
+    /// Advances one velocity-Verlet step. With `measure`, the force evaluation also gathers
+    /// the contact sums that [`Simulation::observables`] reports.
+    pub fn step(&mut self, measure: bool) -> Result<(), NeighborError> {
+        let half = 0.5 * self.dt;
+        kick(&mut self.particles, half);
+        drift(&mut self.particles, self.dt);
+        self.time += self.dt;
+        self.step += 1;
+        self.refresh_neighbors()?;
+        self.compute_forces(measure);
+        kick(&mut self.particles, half);
+        Ok(())
+    }
+
+    /// Rebuilds the neighbour list if particles or images have moved far enough.
+    pub fn refresh_neighbors(&mut self) -> Result<(), NeighborError> {
+        let images = self.domain.image_transforms();
+        if self.neighbors.needs_rebuild(&self.particles, &images) {
+            self.neighbors.build(&mut self.particles, &self.domain)?;
+        }
+        Ok(())
+    }
+
+    /// Evaluates all forces and torques at the current positions and velocities.
+    pub fn compute_forces(&mut self, measure: bool) {
+        let images = self.domain.image_transforms();
+        let mut sums = if measure {
+            pair_forces::<true>(
+                &mut self.particles,
+                &mut self.neighbors,
+                &self.laws,
+                &images,
+                self.dt,
+                &mut self.scratch,
+            )
+        } else {
+            pair_forces::<false>(
+                &mut self.particles,
+                &mut self.neighbors,
+                &self.laws,
+                &images,
+                self.dt,
+                &mut self.scratch,
+            )
+        };
+        for wall in &mut self.walls {
+            let w = wall.apply(&mut self.particles, &self.laws, self.dt);
+            sums.add(&w);
+        }
+        add_gravity(&mut self.particles, self.gravity);
+        if measure {
+            self.measured = (self.step, sums);
+        }
+    }
+
+    /// Step at which the contact sums of [`Simulation::observables`] were gathered.
+    pub fn measured_step(&self) -> u64 {
+        self.measured.0
+    }
+
+    /// The observables at the current state. Contact quantities come from the last step
+    /// taken with `measure = true` (see [`Simulation::measured_step`]).
+    pub fn observables(&self) -> Observables {
+        let p = &self.particles;
+        let (kt, kr) = kinetic_energies(p);
+        let sums = &self.measured.1;
+        let volume = self.domain.volume();
+        let stress = (kinetic_stress_sum(p) + sums.stress_sum) / volume;
+        let free = p.free_count().max(1) as f64;
+        Observables {
+            time: self.time,
+            step: self.step,
+            kinetic_translational: kt,
+            kinetic_rotational: kr,
+            elastic_energy: sums.elastic_energy,
+            contacts: sums.contacts,
+            sliding_fraction: if sums.contacts > 0 {
+                sums.sliding as f64 / sums.contacts as f64
+            } else {
+                0.0
+            },
+            coordination: 2.0 * sums.contacts as f64 / free,
+            volume_fraction: p.free_volume() / volume,
+            stress: to_rows(stress),
+        }
+    }
+}
