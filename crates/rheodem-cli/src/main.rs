@@ -1,3 +1,192 @@
-fn main() {
-    println!("Hello, world!");
+//! The `rheodem` command-line program: run a scenario, resume a run, benchmark the engine.
+
+use anyhow::{Context, Result, bail};
+use clap::{Parser, Subcommand};
+use indicatif::{ProgressBar, ProgressStyle};
+use rheodem::run::Run;
+use rheodem::scenario::Scenario;
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+
+/// Discrete-element simulator and rheology toolkit for cohesive granular materials.
+#[derive(Parser)]
+#[command(name = "rheodem", version, about)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Run a scenario file into a run directory.
+    Run {
+        /// The scenario (TOML).
+        scenario: PathBuf,
+        /// Run directory (default: runs/<scenario name>).
+        #[arg(long, short)]
+        out: Option<PathBuf>,
+        /// Worker threads (default: all cores).
+        #[arg(long, short)]
+        threads: Option<usize>,
+        /// Override the scenario's seed.
+        #[arg(long)]
+        seed: Option<u64>,
+        /// Start over even if the directory already holds a run.
+        #[arg(long)]
+        force: bool,
+        /// No progress bar; only the final line.
+        #[arg(long, short)]
+        quiet: bool,
+    },
+    /// Continue a run from its last checkpoint.
+    Resume {
+        /// The run directory.
+        dir: PathBuf,
+        /// Worker threads (default: the count the run started with, for bit-identical results).
+        #[arg(long, short)]
+        threads: Option<usize>,
+        /// No progress bar.
+        #[arg(long, short)]
+        quiet: bool,
+    },
+    /// Check a scenario and print its resolved values without running it.
+    Check {
+        /// The scenario (TOML).
+        scenario: PathBuf,
+    },
+    /// Throughput on the standard problem of shared/bench (particle-steps per second).
+    Bench {
+        /// Thread counts to measure (default: 1 and all cores).
+        #[arg(long, short, value_delimiter = ',')]
+        threads: Vec<usize>,
+        /// Untimed warm-up steps.
+        #[arg(long, default_value_t = 2000)]
+        warmup: u64,
+        /// Timed steps.
+        #[arg(long, default_value_t = 3000)]
+        steps: u64,
+    },
+}
+
+fn main() -> ExitCode {
+    match run(Cli::parse()) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e:#}");
+            ExitCode::FAILURE
+        }
+    }
+}
+
+fn pool(threads: Option<usize>) -> Result<(rayon::ThreadPool, usize)> {
+    let n = threads.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
+    if n == 0 {
+        bail!("--threads must be at least 1");
+    }
+    let pool = rayon::ThreadPoolBuilder::new().num_threads(n).build().context("cannot start the thread pool")?;
+    Ok((pool, n))
+}
+
+fn run(cli: Cli) -> Result<()> {
+    match cli.command {
+        Command::Run { scenario, out, threads, seed, force, quiet } => {
+            let mut sc = Scenario::from_file(&scenario)?;
+            if let Some(s) = seed {
+                sc.seed = s;
+            }
+            let dir = out.unwrap_or_else(|| {
+                let stem = scenario.file_stem().map_or("run".into(), |s| s.to_string_lossy().into_owned());
+                Path::new("runs").join(stem)
+            });
+            let base = scenario.parent().unwrap_or(Path::new("."));
+            let (pool, n) = pool(threads)?;
+            if !quiet {
+                eprintln!("preparing {} …", scenario.display());
+            }
+            let mut r = pool.install(|| Run::start(sc, base, &dir, n, force))?;
+            if !quiet {
+                eprintln!(
+                    "{} free + {} wall particles, dt = {:.4e} s (t_c/{:.1}), {} steps, {} threads → {}",
+                    r.resolved.free_particles,
+                    r.resolved.wall_particles,
+                    r.resolved.dt,
+                    r.resolved.contact_time / r.resolved.dt,
+                    r.plan.steps,
+                    n,
+                    dir.display()
+                );
+            }
+            advance(&pool, &mut r, &dir, quiet)
+        }
+        Command::Resume { dir, threads, quiet } => {
+            let mut r = Run::resume(&dir)?;
+            let (pool, n) = pool(threads.or(Some(r.threads)))?;
+            if n != r.threads && !quiet {
+                eprintln!("note: the run started with {} threads; with {n} it will not be bit-identical", r.threads);
+            }
+            r.threads = n;
+            if r.is_complete() {
+                println!("{} is already complete ({} steps)", dir.display(), r.plan.steps);
+                return Ok(());
+            }
+            if !quiet {
+                eprintln!("resuming {} at step {} of {}", dir.display(), r.simulation.step, r.plan.steps);
+            }
+            advance(&pool, &mut r, &dir, quiet)
+        }
+        Command::Check { scenario } => {
+            let sc = Scenario::from_file(&scenario)?;
+            let base = scenario.parent().unwrap_or(Path::new("."));
+            let built = rheodem::scenario::build(&sc, base)?;
+            println!("{}", serde_json::to_string_pretty(&built.resolved)?);
+            Ok(())
+        }
+        Command::Bench { threads, warmup, steps } => {
+            let all = std::thread::available_parallelism().map_or(1, |n| n.get());
+            let counts = if threads.is_empty() { if all > 1 { vec![1, all] } else { vec![1] } } else { threads };
+            println!("standard problem: {}", rheodem::bench::DESCRIPTION);
+            for n in counts {
+                let (pool, n) = pool(Some(n))?;
+                let r = pool.install(|| {
+                    let mut sim = rheodem::bench::standard_problem(1.0);
+                    rheodem::bench::run_timed(&mut sim, warmup, steps)
+                });
+                let total = r.loop_time.as_secs_f64();
+                let pct = |d: std::time::Duration| 100.0 * d.as_secs_f64() / total;
+                println!(
+                    "threads {n}: {} particles × {} steps in {:.3} s — neighbours {:.1} % ({} rebuilds), forces {:.1} %, integration {:.1} %; P = {:.1}, Z = {:.2}",
+                    r.particles, r.steps, total, pct(r.neighbor_time), r.rebuilds, pct(r.force_time), pct(r.integrate_time), r.pressure, r.coordination
+                );
+                println!("throughput: {:.0} particle-steps/s ({:.2} M, threads {n})", r.particle_steps_per_second(), r.particle_steps_per_second() / 1e6);
+            }
+            Ok(())
+        }
+    }
+}
+
+fn advance(pool: &rayon::ThreadPool, r: &mut Run, dir: &Path, quiet: bool) -> Result<()> {
+    let bar = if quiet { ProgressBar::hidden() } else { ProgressBar::new(r.plan.steps) };
+    bar.set_style(
+        ProgressStyle::with_template("{bar:40} {pos}/{len} steps  {per_sec}  ETA {eta}")
+            .unwrap_or_else(|_| ProgressStyle::default_bar()),
+    );
+    bar.set_position(r.simulation.step);
+    pool.install(|| {
+        r.advance(dir, |done, _| {
+            if done % 64 == 0 {
+                bar.set_position(done);
+            }
+        })
+    })?;
+    bar.finish_and_clear();
+    let last = r.rows.last();
+    println!(
+        "done: {} steps, t = {:.6e} s, {:.1} s wall{}; outputs in {}",
+        r.simulation.step,
+        r.simulation.time,
+        r.wall_seconds,
+        last.map_or(String::new(), |o| format!(", φ = {:.4}, Z = {:.3}, P = {:.4e} Pa", o.volume_fraction, o.coordination, o.mean_stress())),
+        dir.display()
+    );
+    Ok(())
 }

@@ -4,15 +4,23 @@
 //! frictional contacts, and the rheology tools built on it. All quantities are SI unless a
 //! doc comment says otherwise.
 
+pub mod bench;
 pub mod contact;
 pub mod domain;
 pub mod forces;
+pub mod generate;
 pub mod integrate;
+pub mod io;
 pub mod measure;
 pub mod neighbor;
 pub mod particles;
+pub mod run;
+pub mod scenario;
 pub mod simulation;
 pub mod timestep;
 pub mod walls;
 
 pub use simulation::Simulation;
+
+/// Version of the program, recorded in every output.
+pub const VERSION: &str = env!("CARGO_PKG_VERSION");

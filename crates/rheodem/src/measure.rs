@@ -13,7 +13,7 @@ pub fn outer(a: DVec3, b: DVec3) -> DMat3 {
 }
 
 /// Sums over contacts gathered by a force evaluation in measuring mode.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct ContactSums {
     /// `Σ f_ij ⊗ l_ij` over interacting pairs (N m), `f_ij` the force on `i` and
     /// `l_ij = r_i − r_j` through periodic images; for a planar wall, `l` runs from the
@@ -25,6 +25,18 @@ pub struct ContactSums {
     pub contacts: u64,
     /// Contacts whose sliding spring slipped.
     pub sliding: u64,
+}
+
+impl Default for ContactSums {
+    /// All sums zero (glam's `DMat3::default()` is the identity, hence no derive).
+    fn default() -> Self {
+        ContactSums {
+            stress_sum: DMat3::ZERO,
+            elastic_energy: 0.0,
+            contacts: 0,
+            sliding: 0,
+        }
+    }
 }
 
 impl ContactSums {

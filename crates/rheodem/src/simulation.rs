@@ -81,15 +81,24 @@ impl Simulation {
     /// Advances one velocity-Verlet step. With `measure`, the force evaluation also gathers
     /// the contact sums that [`Simulation::observables`] reports.
     pub fn step(&mut self, measure: bool) -> Result<(), NeighborError> {
-        let half = 0.5 * self.dt;
-        kick(&mut self.particles, half);
+        self.begin_step();
+        self.refresh_neighbors()?;
+        self.compute_forces(measure);
+        self.end_step();
+        Ok(())
+    }
+
+    /// First half of a step: half kick, drift, advance the clock.
+    pub fn begin_step(&mut self) {
+        kick(&mut self.particles, 0.5 * self.dt);
         drift(&mut self.particles, self.dt);
         self.time += self.dt;
         self.step += 1;
-        self.refresh_neighbors()?;
-        self.compute_forces(measure);
-        kick(&mut self.particles, half);
-        Ok(())
+    }
+
+    /// Last part of a step, after the forces: the second half kick.
+    pub fn end_step(&mut self) {
+        kick(&mut self.particles, 0.5 * self.dt);
     }
 
     /// Rebuilds the neighbour list if particles or images have moved far enough.

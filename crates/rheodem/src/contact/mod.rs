@@ -198,6 +198,11 @@ impl ContactTable {
         self.laws[b * self.species + a] = law;
     }
 
+    /// Applies `f` to the law of every pair.
+    pub fn map(&mut self, f: impl FnMut(&mut ContactLaw)) {
+        self.laws.iter_mut().for_each(f);
+    }
+
     /// The law of the pair `(a, b)`.
     #[inline]
     pub fn get(&self, a: u16, b: u16) -> &ContactLaw {

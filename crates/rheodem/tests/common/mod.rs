@@ -89,3 +89,113 @@ pub fn simulation(
 pub fn slot(sim: &Simulation, id: u32) -> usize {
     sim.particles.slot_of()[id as usize] as usize
 }
+
+// ---------------------------------------------------------------------------------------
+// Helpers of the friction and conservation tests.
+// ---------------------------------------------------------------------------------------
+
+use rand::{RngExt, SeedableRng};
+use rand_xoshiro::Xoshiro256PlusPlus;
+
+/// Radius of the reference test sphere (m): `d_p = 2.2 mm`, as in the paper.
+pub const A_REF: f64 = 1.1e-3;
+
+/// Mass (kg) of a free sphere of radius `a` (m) at the test density.
+pub fn mass(a: f64) -> f64 {
+    RHO * 4.0 / 3.0 * std::f64::consts::PI * a.powi(3)
+}
+
+/// A deterministic random generator for test set-ups.
+pub fn rng(seed: u64) -> Xoshiro256PlusPlus {
+    Xoshiro256PlusPlus::seed_from_u64(seed)
+}
+
+/// A vector with components uniform in `[-s, s]`.
+pub fn random_vec(rng: &mut Xoshiro256PlusPlus, s: f64) -> DVec3 {
+    DVec3::new(
+        rng.random_range(-s..s),
+        rng.random_range(-s..s),
+        rng.random_range(-s..s),
+    )
+}
+
+/// Tangential part of the relative velocity of the two surfaces at the contact point of
+/// spheres `i` and `j`: `v_c = (v_i − v_j) − (l_i ω_i + l_j ω_j) × n`, `n` the unit normal
+/// from `j` to `i` and `l` the lever arms (the radii when the spheres just touch), with the
+/// normal component removed. This is the `v_t` of PHYSICS §2.2.
+pub fn contact_slip(v_rel: DVec3, w_i: DVec3, w_j: DVec3, l_i: f64, l_j: f64, n: DVec3) -> DVec3 {
+    let v_c = v_rel - (l_i * w_i + l_j * w_j).cross(n);
+    v_c - n * n.dot(v_c)
+}
+
+/// A triply periodic, polydisperse packing on a face-centred cubic lattice:
+/// `4 cells³` free spheres with radii uniform in `[r, w r]` (mean diameter `2 A_REF`),
+/// assigned to lattice sites at random, the box edge set so that the volume fraction is
+/// `phi`. Velocity components are uniform with standard deviation `v_rms` and zero total
+/// momentum is *not* enforced; angular velocity components are uniform with standard
+/// deviation `spin` (rad/s). At `w = 1.2`, `phi ≈ 0.575` is the density where the largest
+/// spheres just touch their nearest lattice neighbours; above it the larger pairs start
+/// out overlapping, which gives a dense set-up with many contacts from the first step.
+pub fn fcc_packing(
+    cells: usize,
+    phi: f64,
+    w: f64,
+    v_rms: f64,
+    spin: f64,
+    seed: u64,
+) -> (Vec<Sphere>, Domain) {
+    let mut rng = rng(seed);
+    let n = 4 * cells * cells * cells;
+    let raw: Vec<f64> = (0..n).map(|_| rng.random_range(1.0..w)).collect();
+    let mean = raw.iter().sum::<f64>() / n as f64;
+    let radii: Vec<f64> = raw.iter().map(|r| r * A_REF / mean).collect();
+    let volume: f64 = radii
+        .iter()
+        .map(|a| 4.0 / 3.0 * std::f64::consts::PI * a.powi(3))
+        .sum();
+    let edge = (volume / phi).cbrt();
+    let s = edge / cells as f64;
+    // Uniform in [-√3 σ, √3 σ] has standard deviation σ.
+    let (v_amp, w_amp) = (3f64.sqrt() * v_rms, 3f64.sqrt() * spin);
+    let basis = [
+        DVec3::new(0.0, 0.0, 0.0),
+        DVec3::new(0.5, 0.5, 0.0),
+        DVec3::new(0.5, 0.0, 0.5),
+        DVec3::new(0.0, 0.5, 0.5),
+    ];
+    let mut spheres = Vec::with_capacity(n);
+    for i in 0..cells {
+        for j in 0..cells {
+            for k in 0..cells {
+                for b in &basis {
+                    let cell = DVec3::new(i as f64, j as f64, k as f64);
+                    let position = (cell + *b + DVec3::splat(0.25)) * s;
+                    let mut sph = sphere(position, random_vec(&mut rng, v_amp), radii[spheres.len()]);
+                    sph.angular_velocity = if spin > 0.0 {
+                        random_vec(&mut rng, w_amp)
+                    } else {
+                        DVec3::ZERO
+                    };
+                    spheres.push(sph);
+                }
+            }
+        }
+    }
+    let domain = Domain {
+        lo: DVec3::ZERO,
+        hi: DVec3::splat(edge),
+        periodic: [true; 3],
+    };
+    (spheres, domain)
+}
+
+/// Least-squares straight line through `(x, y)`: returns `(intercept, slope)`.
+pub fn linear_fit(x: &[f64], y: &[f64]) -> (f64, f64) {
+    let n = x.len() as f64;
+    let mx = x.iter().sum::<f64>() / n;
+    let my = y.iter().sum::<f64>() / n;
+    let sxy: f64 = x.iter().zip(y).map(|(a, b)| (a - mx) * (b - my)).sum();
+    let sxx: f64 = x.iter().map(|a| (a - mx) * (a - mx)).sum();
+    let slope = sxy / sxx;
+    (my - slope * mx, slope)
+}

@@ -1,0 +1,152 @@
+//! The standard throughput problem of `shared/bench/` (4096 polydisperse spheres at
+//! `φ = 0.62`, Hooke + tangential history, `μ = 0.5`, `dt = 3.2·10⁻⁴`, model units).
+//!
+//! Until Lees-Edwards boundaries land, the packing runs in the triply periodic box from the
+//! affine profile `v_x = γ̇ (y − L/2)`, `γ̇ = 1`: the velocity jump at the `y` boundary and the
+//! decaying shear keep contacts forming and breaking.
+
+use crate::contact::{ContactLaw, ContactTable, Damping, NormalLaw, Resistance};
+use crate::domain::Domain;
+use crate::io::packing::parse_packing;
+use crate::particles::{Motion, Particles, Sphere};
+use crate::Simulation;
+use glam::DVec3;
+use std::time::{Duration, Instant};
+
+/// One-line description of the problem as run here.
+pub const DESCRIPTION: &str = "shared/bench packing, 4096 spheres, phi = 0.62, Hooke + tangential history, \
+mu = 0.5, dt = 3.2e-4, triply periodic box from the affine profile v_x = (y - L/2) (no Lees-Edwards yet)";
+
+/// The packing of `shared/bench/packing.txt`, shipped with the crate.
+pub const PACKING: &str = include_str!("../data/bench-packing.txt");
+
+/// The bench's contact law: `k_n = 10⁴`, `k_t = 2/7 k_n`, `γ_n = 27.6941 m_ij`, no
+/// tangential damping, `μ = 0.5`.
+pub fn bench_law() -> ContactLaw {
+    ContactLaw {
+        normal: NormalLaw {
+            stiffness: 1.0e4,
+            damping: Damping {
+                per_mass: 27.6941,
+                ..Damping::NONE
+            },
+        },
+        tangential: Resistance {
+            stiffness: 2857.142857,
+            damping: Damping::NONE,
+            mu_static: 0.5,
+            mu_dynamic: 0.5,
+        },
+        rolling: Resistance::NONE,
+        torsion: Resistance::NONE,
+    }
+}
+
+/// Builds the standard problem with shear rate `shear_rate` (model units) of the initial
+/// affine profile.
+pub fn standard_problem(shear_rate: f64) -> Simulation {
+    let packing = parse_packing(PACKING).expect("the shipped packing is valid");
+    let edge = packing.box_edge.expect("the shipped packing has a box edge");
+    let mut particles = Particles::default();
+    for (d, r) in &packing.spheres {
+        particles.push(
+            Sphere {
+                position: *r,
+                velocity: DVec3::new(shear_rate * (r.y - 0.5 * edge), 0.0, 0.0),
+                angular_velocity: DVec3::ZERO,
+                radius: 0.5 * d,
+                species: 0,
+                motion: Motion::Free,
+            },
+            1.0,
+        );
+    }
+    let domain = Domain {
+        lo: DVec3::ZERO,
+        hi: DVec3::splat(edge),
+        periodic: [true; 3],
+    };
+    Simulation::new(
+        particles,
+        domain,
+        ContactTable::uniform(1, bench_law()),
+        Vec::new(),
+        DVec3::ZERO,
+        3.2e-4,
+        0.2,
+        0.0,
+    )
+    .expect("the standard problem's box is large enough")
+}
+
+/// Timing of a benchmark run.
+#[derive(Clone, Debug)]
+pub struct BenchReport {
+    /// Threads used.
+    pub threads: usize,
+    /// Particles.
+    pub particles: usize,
+    /// Timed steps.
+    pub steps: u64,
+    /// Wall time of the timed loop.
+    pub loop_time: Duration,
+    /// Time in neighbour-list checks and rebuilds.
+    pub neighbor_time: Duration,
+    /// Time in force evaluation.
+    pub force_time: Duration,
+    /// Time in the integrator (kicks and drift).
+    pub integrate_time: Duration,
+    /// Neighbour-list rebuilds in the timed loop.
+    pub rebuilds: u64,
+    /// Mean stress at the end (model units).
+    pub pressure: f64,
+    /// Coordination number at the end.
+    pub coordination: f64,
+}
+
+impl BenchReport {
+    /// Throughput in particle-steps per second.
+    pub fn particle_steps_per_second(&self) -> f64 {
+        self.particles as f64 * self.steps as f64 / self.loop_time.as_secs_f64()
+    }
+}
+
+/// Runs `warmup` untimed steps and `steps` timed steps of `sim` in the current rayon pool,
+/// timing the phases of each step.
+pub fn run_timed(sim: &mut Simulation, warmup: u64, steps: u64) -> BenchReport {
+    for _ in 0..warmup {
+        sim.step(false).expect("bench box stays valid");
+    }
+    let builds0 = sim.neighbors.builds;
+    let (mut t_nb, mut t_f, mut t_int) = (Duration::ZERO, Duration::ZERO, Duration::ZERO);
+    let start = Instant::now();
+    for k in 0..steps {
+        let measure = k + 1 == steps;
+        let t0 = Instant::now();
+        sim.begin_step();
+        let t1 = Instant::now();
+        sim.refresh_neighbors().expect("bench box stays valid");
+        let t2 = Instant::now();
+        sim.compute_forces(measure);
+        let t3 = Instant::now();
+        sim.end_step();
+        let t4 = Instant::now();
+        t_int += (t1 - t0) + (t4 - t3);
+        t_nb += t2 - t1;
+        t_f += t3 - t2;
+    }
+    let loop_time = start.elapsed();
+    let obs = sim.observables();
+    BenchReport {
+        threads: rayon::current_num_threads(),
+        particles: sim.particles.len(),
+        steps,
+        loop_time,
+        neighbor_time: t_nb,
+        force_time: t_f,
+        integrate_time: t_int,
+        rebuilds: sim.neighbors.builds - builds0,
+        pressure: obs.mean_stress(),
+        coordination: obs.coordination,
+    }
+}

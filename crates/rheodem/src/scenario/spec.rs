@@ -1,0 +1,364 @@
+//! The scenario file format (TOML, SI units). Every table rejects unknown keys.
+//!
+//! ```toml
+//! seed = 7
+//! [domain]                      # box [lo, lo + size], periodic per axis
+//! size = [0.02, 0.02, 0.02]
+//! periodic = [true, true, true]
+//! [[species]]
+//! name = "glass"
+//! density = 2000.0
+//! [[contact]]                   # no `species` key: the default for every pair
+//! normal = { stiffness = 100.0, restitution = 0.8 }
+//! friction = { stiffness_ratio = 0.2857, damping_ratio = 0.2857, mu = 0.5 }
+//! [[particles]]
+//! kind = "random"
+//! species = "glass"
+//! count = 500
+//! mean_diameter = 2.2e-3
+//! polydispersity = 2.0
+//! [preparation]
+//! volume_fraction = 0.6
+//! [run]
+//! duration = 0.05
+//! ```
+
+use serde::{Deserialize, Serialize};
+
+/// A whole scenario.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Scenario {
+    /// Free-text title of the run.
+    #[serde(default)]
+    pub title: Option<String>,
+    /// Seed of every random choice (particle sizes, positions, velocities).
+    #[serde(default = "default_seed")]
+    pub seed: u64,
+    /// The box.
+    pub domain: DomainSpec,
+    /// Particle species (materials).
+    pub species: Vec<SpeciesSpec>,
+    /// Contact laws: one without `species` is the default, others override a pair.
+    #[serde(rename = "contact")]
+    pub contacts: Vec<ContactSpec>,
+    /// Particle groups, added in order.
+    #[serde(default)]
+    pub particles: Vec<ParticleGroup>,
+    /// Infinite planar walls.
+    #[serde(default, rename = "wall")]
+    pub walls: Vec<WallSpec>,
+    /// Gravitational acceleration (m/s²).
+    #[serde(default)]
+    pub gravity: [f64; 3],
+    /// Optional compression of a loose packing before the run.
+    #[serde(default)]
+    pub preparation: Option<PreparationSpec>,
+    /// Run length and time step.
+    pub run: RunSpec,
+    /// Output cadence.
+    #[serde(default)]
+    pub output: OutputSpec,
+    /// Neighbour-list settings.
+    #[serde(default)]
+    pub neighbor: NeighborSpec,
+}
+
+fn default_seed() -> u64 {
+    1
+}
+
+/// The simulation box.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DomainSpec {
+    /// Lower corner (m); default the origin.
+    #[serde(default)]
+    pub lo: [f64; 3],
+    /// Edge lengths (m). May be omitted when a packing file gives its box edge.
+    #[serde(default)]
+    pub size: Option<[f64; 3]>,
+    /// Periodicity of `x`, `y`, `z`.
+    #[serde(default)]
+    pub periodic: [bool; 3],
+}
+
+/// A material.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SpeciesSpec {
+    /// Name used to refer to it.
+    pub name: String,
+    /// Density (kg/m³), positive.
+    pub density: f64,
+}
+
+/// The contact law of a species pair (or the default one).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ContactSpec {
+    /// The pair this law applies to; omitted for the default law.
+    #[serde(default)]
+    pub species: Option<[String; 2]>,
+    /// Normal force.
+    pub normal: NormalSpec,
+    /// Sliding friction; omitted for frictionless contacts.
+    #[serde(default)]
+    pub friction: Option<ResistanceSpec>,
+    /// Rolling resistance; omitted for none.
+    #[serde(default)]
+    pub rolling: Option<ResistanceSpec>,
+    /// Torsion resistance; omitted for none.
+    #[serde(default)]
+    pub torsion: Option<ResistanceSpec>,
+}
+
+/// Linear visco-elastic normal force. At most one of `restitution`, `damping`,
+/// `damping_per_mass` may be given; none means no damping.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct NormalSpec {
+    /// `k_n` (N/m), positive.
+    pub stiffness: f64,
+    /// Restitution coefficient `e` in (0, 1], the same for every pair.
+    #[serde(default)]
+    pub restitution: Option<f64>,
+    /// Fixed `γ_n` (kg/s), ≥ 0.
+    #[serde(default)]
+    pub damping: Option<f64>,
+    /// Mass-proportional damping `γ_n = γ̂ m_ij`, `γ̂` in 1/s, ≥ 0.
+    #[serde(default)]
+    pub damping_per_mass: Option<f64>,
+}
+
+/// A spring–dashpot–Coulomb resistance (friction, rolling, torsion).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ResistanceSpec {
+    /// Spring stiffness (N/m); or give `stiffness_ratio`.
+    #[serde(default)]
+    pub stiffness: Option<f64>,
+    /// Spring stiffness as a fraction of `k_n` (the paper: 2/7).
+    #[serde(default)]
+    pub stiffness_ratio: Option<f64>,
+    /// Fixed dashpot coefficient (kg/s).
+    #[serde(default)]
+    pub damping: Option<f64>,
+    /// Dashpot as a fraction of the normal damping (the paper: 2/7).
+    #[serde(default)]
+    pub damping_ratio: Option<f64>,
+    /// Mass-proportional dashpot `γ̂ m_ij` (1/s).
+    #[serde(default)]
+    pub damping_per_mass: Option<f64>,
+    /// Coulomb coefficient used for both static and dynamic limits.
+    #[serde(default)]
+    pub mu: Option<f64>,
+    /// Static Coulomb coefficient (with `mu_dynamic`, instead of `mu`).
+    #[serde(default)]
+    pub mu_static: Option<f64>,
+    /// Dynamic Coulomb coefficient (≤ `mu_static`).
+    #[serde(default)]
+    pub mu_dynamic: Option<f64>,
+}
+
+/// How a particle moves.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case", deny_unknown_fields)]
+pub enum MotionSpec {
+    /// Integrated.
+    #[default]
+    Free,
+    /// Never moves (wall particle).
+    Fixed,
+    /// Rotates rigidly (wall particle).
+    Rotating {
+        /// A point on the axis (m).
+        center: [f64; 3],
+        /// Axis direction (normalised on use).
+        axis: [f64; 3],
+        /// Angular velocity (rad/s).
+        omega: f64,
+    },
+}
+
+/// One explicitly given sphere.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SphereSpec {
+    /// Radius (m), positive.
+    pub radius: f64,
+    /// Centre (m).
+    pub position: [f64; 3],
+    /// Velocity (m/s).
+    #[serde(default)]
+    pub velocity: [f64; 3],
+    /// Angular velocity (rad/s).
+    #[serde(default)]
+    pub angular_velocity: [f64; 3],
+}
+
+/// A group of particles.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
+pub enum ParticleGroup {
+    /// Spheres listed one by one.
+    Explicit {
+        /// Species name.
+        species: String,
+        /// Motion of every sphere of the group.
+        #[serde(default)]
+        motion: MotionSpec,
+        /// The spheres.
+        spheres: Vec<SphereSpec>,
+    },
+    /// `count` polydisperse spheres placed at random without overlap.
+    Random {
+        /// Species name.
+        species: String,
+        /// Number of spheres, ≥ 1.
+        count: usize,
+        /// Mean diameter `d_p` (m).
+        mean_diameter: f64,
+        /// Width ratio `w = r_max / r_min` ≥ 1; radii uniform in `[r_min, w r_min]`.
+        #[serde(default = "one")]
+        polydispersity: f64,
+        /// Standard deviation of each initial velocity component (m/s).
+        #[serde(default)]
+        velocity_spread: f64,
+    },
+    /// Spheres read from a file of `diameter x y z` rows (path relative to the scenario).
+    File {
+        /// Species name.
+        species: String,
+        /// Path of the packing file.
+        path: String,
+        /// Factor applied to every length of the file (e.g. 2.2e-3 for a file in diameters).
+        #[serde(default = "one")]
+        length_scale: f64,
+        /// Motion of every sphere of the group.
+        #[serde(default)]
+        motion: MotionSpec,
+    },
+    /// A rough wall: a square lattice of equal spheres covering the parallelogram
+    /// `origin + s·edge_a + t·edge_b`, `s, t ∈ [0, 1]`.
+    Lattice {
+        /// Species name.
+        species: String,
+        /// Corner of the parallelogram (m).
+        origin: [f64; 3],
+        /// First edge (m).
+        edge_a: [f64; 3],
+        /// Second edge (m).
+        edge_b: [f64; 3],
+        /// Sphere radius (m).
+        radius: f64,
+        /// Centre-to-centre spacing (m); default one diameter.
+        #[serde(default)]
+        spacing: Option<f64>,
+        /// Motion of every sphere (default fixed).
+        #[serde(default = "fixed")]
+        motion: MotionSpec,
+    },
+}
+
+fn one() -> f64 {
+    1.0
+}
+
+fn fixed() -> MotionSpec {
+    MotionSpec::Fixed
+}
+
+/// An infinite planar wall.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct WallSpec {
+    /// A point on the plane (m).
+    pub point: [f64; 3],
+    /// Normal pointing towards the particles (normalised on use).
+    pub normal: [f64; 3],
+    /// Species of the wall material.
+    pub species: String,
+}
+
+/// Isotropic compression of a periodic packing before the run: the box shrinks affinely
+/// (frictionless contacts meanwhile) until the target is reached, then the packing relaxes
+/// with the scenario's contact laws.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PreparationSpec {
+    /// Target volume fraction (0, 0.74).
+    #[serde(default)]
+    pub volume_fraction: Option<f64>,
+    /// Target mean stress `tr σ / 3` (Pa).
+    #[serde(default)]
+    pub pressure: Option<f64>,
+    /// Compression strain per contact time `t_c` (default 2·10⁻³).
+    #[serde(default)]
+    pub strain_per_contact_time: Option<f64>,
+    /// Relaxation after compression, in contact times `t_c` (default 200).
+    #[serde(default)]
+    pub relax_contact_times: Option<f64>,
+}
+
+/// Run length and time step. Give exactly one of `duration` and `steps`.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RunSpec {
+    /// Simulated time (s).
+    #[serde(default)]
+    pub duration: Option<f64>,
+    /// Number of steps.
+    #[serde(default)]
+    pub steps: Option<u64>,
+    /// Time step (s); at most `t_c / 10`. Default `t_c · dt_fraction`.
+    #[serde(default)]
+    pub dt: Option<f64>,
+    /// Time step as a fraction of the shortest contact time (default 1/50, at most 1/10).
+    #[serde(default)]
+    pub dt_fraction: Option<f64>,
+}
+
+/// How often to write each output, as a count over the run (at least 1 each).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct OutputSpec {
+    /// Rows of the time series (default 200).
+    #[serde(default = "default_rows")]
+    pub timeseries_rows: u64,
+    /// VTK snapshots (default 20; 0 for none).
+    #[serde(default = "default_snapshots")]
+    pub snapshots: u64,
+    /// Checkpoints (default 10; 0 for none but the final one).
+    #[serde(default = "default_checkpoints")]
+    pub checkpoints: u64,
+}
+
+fn default_rows() -> u64 {
+    200
+}
+fn default_snapshots() -> u64 {
+    20
+}
+fn default_checkpoints() -> u64 {
+    10
+}
+
+impl Default for OutputSpec {
+    fn default() -> Self {
+        OutputSpec {
+            timeseries_rows: default_rows(),
+            snapshots: default_snapshots(),
+            checkpoints: default_checkpoints(),
+        }
+    }
+}
+
+/// Neighbour-list settings.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct NeighborSpec {
+    /// Verlet skin (m); default 0.2 × the smallest particle diameter.
+    #[serde(default)]
+    pub skin: Option<f64>,
+}
