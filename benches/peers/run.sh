@@ -273,6 +273,10 @@ echo
 echo "- date: $(date -u '+%Y-%m-%d %H:%M UTC')"
 echo "- machine: $(env -u OMP_NUM_THREADS -u OMP_THREAD_LIMIT nproc) logical CPUs (nproc), $CPU_MODEL"
 echo "- load average (1/5/15 min) before: $LOAD_BEFORE, after: $LOAD_AFTER"
+# Busy machine? 2 MPI ranks on 2 cores busy-poll, so any other load slows them several-fold.
+if awk -v l="${LOAD_BEFORE%% *}" 'BEGIN { exit !(l > 0.5) }'; then
+    echo "- **warning: the machine was not idle (1-min load ${LOAD_BEFORE%% *} > 0.5); the 2-rank/2-thread figures are unreliable**"
+fi
 echo "- problem: $BENCH_DIR (4096 spheres, phi 0.62, Lees-Edwards shear); $NWARM warm-up + $NRUN timed steps"
 echo "- repetitions: $REPEATS per configuration, interleaved; table shows the median"
 if [[ -n "$LMP_VERSION" ]]; then

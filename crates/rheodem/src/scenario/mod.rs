@@ -48,8 +48,18 @@ pub(crate) fn invalid(key: impl Into<String>, value: impl ToString, allowed: imp
 
 impl Scenario {
     /// Parses a scenario from TOML text (no validation beyond the format).
+    /// Errors name the key path (e.g. `particles[0].count`) and the line.
     pub fn from_toml(text: &str) -> Result<Scenario, ScenarioError> {
-        toml::from_str(text).map_err(|e| ScenarioError::Parse(format!("scenario: {e}")))
+        let de = toml::Deserializer::parse(text).map_err(|e| ScenarioError::Parse(format!("scenario: {e}")))?;
+        serde_path_to_error::deserialize(de).map_err(|e| {
+            let path = e.path().to_string();
+            let inner = e.into_inner();
+            if path.is_empty() || path == "." {
+                ScenarioError::Parse(format!("scenario: {inner}"))
+            } else {
+                ScenarioError::Parse(format!("scenario key `{path}`: {inner}"))
+            }
+        })
     }
 
     /// Reads and parses a scenario file.
