@@ -18,10 +18,11 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
-    /// Run a scenario file into a run directory.
+    /// Run a scenario file into a run directory (without a file: the built-in default,
+    /// examples/dense-packing.toml).
     Run {
-        /// The scenario (TOML).
-        scenario: PathBuf,
+        /// The scenario (TOML); omitted: the built-in default.
+        scenario: Option<PathBuf>,
         /// Run directory (default: runs/<scenario name>).
         #[arg(long, short)]
         out: Option<PathBuf>,
@@ -68,6 +69,9 @@ enum Command {
     },
 }
 
+/// The scenario `rheodem run` uses when given none.
+const DEFAULT_SCENARIO: &str = include_str!("../../../examples/dense-packing.toml");
+
 fn main() -> ExitCode {
     match run(Cli::parse()) {
         Ok(()) => ExitCode::SUCCESS,
@@ -83,27 +87,50 @@ fn pool(threads: Option<usize>) -> Result<(rayon::ThreadPool, usize)> {
     if n == 0 {
         bail!("--threads must be at least 1");
     }
-    let pool = rayon::ThreadPoolBuilder::new().num_threads(n).build().context("cannot start the thread pool")?;
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(n)
+        .build()
+        .context("cannot start the thread pool")?;
     Ok((pool, n))
 }
 
 fn run(cli: Cli) -> Result<()> {
     match cli.command {
-        Command::Run { scenario, out, threads, seed, force, quiet } => {
-            let mut sc = Scenario::from_file(&scenario)?;
+        Command::Run {
+            scenario,
+            out,
+            threads,
+            seed,
+            force,
+            quiet,
+        } => {
+            let (mut sc, name, base) = match &scenario {
+                Some(path) => (
+                    Scenario::from_file(path)?,
+                    path.file_stem()
+                        .map_or("run".into(), |s| s.to_string_lossy().into_owned()),
+                    path.parent().unwrap_or(Path::new(".")).to_path_buf(),
+                ),
+                None => (
+                    Scenario::from_toml(DEFAULT_SCENARIO)?,
+                    "default".to_string(),
+                    PathBuf::from("."),
+                ),
+            };
             if let Some(s) = seed {
                 sc.seed = s;
             }
-            let dir = out.unwrap_or_else(|| {
-                let stem = scenario.file_stem().map_or("run".into(), |s| s.to_string_lossy().into_owned());
-                Path::new("runs").join(stem)
-            });
-            let base = scenario.parent().unwrap_or(Path::new("."));
+            let dir = out.unwrap_or_else(|| Path::new("runs").join(&name));
+            let shown = scenario
+                .as_ref()
+                .map_or("the built-in default scenario".to_string(), |p| {
+                    p.display().to_string()
+                });
             let (pool, n) = pool(threads)?;
             if !quiet {
-                eprintln!("preparing {} …", scenario.display());
+                eprintln!("preparing {shown} …");
             }
-            let mut r = pool.install(|| Run::start(sc, base, &dir, n, force))?;
+            let mut r = pool.install(|| Run::start(sc, &base, &dir, n, force))?;
             if !quiet {
                 eprintln!(
                     "{} free + {} wall particles, dt = {:.4e} s (t_c/{:.1}), {} steps, {} threads → {}",
@@ -118,19 +145,35 @@ fn run(cli: Cli) -> Result<()> {
             }
             advance(&pool, &mut r, &dir, quiet)
         }
-        Command::Resume { dir, threads, quiet } => {
+        Command::Resume {
+            dir,
+            threads,
+            quiet,
+        } => {
             let mut r = Run::resume(&dir)?;
             let (pool, n) = pool(threads.or(Some(r.threads)))?;
             if n != r.threads && !quiet {
-                eprintln!("note: the run started with {} threads; with {n} it will not be bit-identical", r.threads);
+                eprintln!(
+                    "note: the run started with {} threads; with {n} it will not be bit-identical",
+                    r.threads
+                );
             }
             r.threads = n;
             if r.is_complete() {
-                println!("{} is already complete ({} steps)", dir.display(), r.plan.steps);
+                println!(
+                    "{} is already complete ({} steps)",
+                    dir.display(),
+                    r.plan.steps
+                );
                 return Ok(());
             }
             if !quiet {
-                eprintln!("resuming {} at step {} of {}", dir.display(), r.simulation.step, r.plan.steps);
+                eprintln!(
+                    "resuming {} at step {} of {}",
+                    dir.display(),
+                    r.simulation.step,
+                    r.plan.steps
+                );
             }
             advance(&pool, &mut r, &dir, quiet)
         }
@@ -141,9 +184,17 @@ fn run(cli: Cli) -> Result<()> {
             println!("{}", serde_json::to_string_pretty(&built.resolved)?);
             Ok(())
         }
-        Command::Bench { threads, warmup, steps } => {
+        Command::Bench {
+            threads,
+            warmup,
+            steps,
+        } => {
             let all = std::thread::available_parallelism().map_or(1, |n| n.get());
-            let counts = if threads.is_empty() { if all > 1 { vec![1, all] } else { vec![1] } } else { threads };
+            let counts = if threads.is_empty() {
+                if all > 1 { vec![1, all] } else { vec![1] }
+            } else {
+                threads
+            };
             println!("standard problem: {}", rheodem::bench::DESCRIPTION);
             for n in counts {
                 let (pool, n) = pool(Some(n))?;
@@ -155,9 +206,21 @@ fn run(cli: Cli) -> Result<()> {
                 let pct = |d: std::time::Duration| 100.0 * d.as_secs_f64() / total;
                 println!(
                     "threads {n}: {} particles × {} steps in {:.3} s — neighbours {:.1} % ({} rebuilds), forces {:.1} %, integration {:.1} %; P = {:.1}, Z = {:.2}",
-                    r.particles, r.steps, total, pct(r.neighbor_time), r.rebuilds, pct(r.force_time), pct(r.integrate_time), r.pressure, r.coordination
+                    r.particles,
+                    r.steps,
+                    total,
+                    pct(r.neighbor_time),
+                    r.rebuilds,
+                    pct(r.force_time),
+                    pct(r.integrate_time),
+                    r.pressure,
+                    r.coordination
                 );
-                println!("throughput: {:.0} particle-steps/s ({:.2} M, threads {n})", r.particle_steps_per_second(), r.particle_steps_per_second() / 1e6);
+                println!(
+                    "throughput: {:.0} particle-steps/s ({:.2} M, threads {n})",
+                    r.particle_steps_per_second(),
+                    r.particle_steps_per_second() / 1e6
+                );
             }
             Ok(())
         }
@@ -165,7 +228,11 @@ fn run(cli: Cli) -> Result<()> {
 }
 
 fn advance(pool: &rayon::ThreadPool, r: &mut Run, dir: &Path, quiet: bool) -> Result<()> {
-    let bar = if quiet { ProgressBar::hidden() } else { ProgressBar::new(r.plan.steps) };
+    let bar = if quiet {
+        ProgressBar::hidden()
+    } else {
+        ProgressBar::new(r.plan.steps)
+    };
     bar.set_style(
         ProgressStyle::with_template("{bar:40} {pos}/{len} steps  {per_sec}  ETA {eta}")
             .unwrap_or_else(|_| ProgressStyle::default_bar()),
@@ -185,7 +252,12 @@ fn advance(pool: &rayon::ThreadPool, r: &mut Run, dir: &Path, quiet: bool) -> Re
         r.simulation.step,
         r.simulation.time,
         r.wall_seconds,
-        last.map_or(String::new(), |o| format!(", φ = {:.4}, Z = {:.3}, P = {:.4e} Pa", o.volume_fraction, o.coordination, o.mean_stress())),
+        last.map_or(String::new(), |o| format!(
+            ", φ = {:.4}, Z = {:.3}, P = {:.4e} Pa",
+            o.volume_fraction,
+            o.coordination,
+            o.mean_stress()
+        )),
         dir.display()
     );
     Ok(())

@@ -5,11 +5,11 @@
 //! affine profile `v_x = γ̇ (y − L/2)`, `γ̇ = 1`: the velocity jump at the `y` boundary and the
 //! decaying shear keep contacts forming and breaking.
 
+use crate::Simulation;
 use crate::contact::{ContactLaw, ContactTable, Damping, NormalLaw, Resistance};
 use crate::domain::Domain;
 use crate::io::packing::parse_packing;
 use crate::particles::{Motion, Particles, Sphere};
-use crate::Simulation;
 use glam::DVec3;
 use std::time::{Duration, Instant};
 
@@ -46,7 +46,9 @@ pub fn bench_law() -> ContactLaw {
 /// affine profile.
 pub fn standard_problem(shear_rate: f64) -> Simulation {
     let packing = parse_packing(PACKING).expect("the shipped packing is valid");
-    let edge = packing.box_edge.expect("the shipped packing has a box edge");
+    let edge = packing
+        .box_edge
+        .expect("the shipped packing has a box edge");
     let mut particles = Particles::default();
     for (d, r) in &packing.spheres {
         particles.push(

@@ -114,7 +114,10 @@ impl Domain {
 
     /// Largest change of any image's position shift between two sets of transforms (m):
     /// how much a pair's separation can change through the boundary alone.
-    pub fn image_drift(a: &[ImageTransform; IMAGE_COUNT], b: &[ImageTransform; IMAGE_COUNT]) -> f64 {
+    pub fn image_drift(
+        a: &[ImageTransform; IMAGE_COUNT],
+        b: &[ImageTransform; IMAGE_COUNT],
+    ) -> f64 {
         a.iter()
             .zip(b)
             .map(|(x, y)| (x.shift - y.shift).length())
@@ -191,7 +194,10 @@ mod tests {
         let d = cube();
         let t = d.image_transforms();
         let code = image_code([1, -1, 0]);
-        assert_eq!(t[code as usize].position(DVec3::ZERO), DVec3::new(2.0, -2.0, 0.0));
+        assert_eq!(
+            t[code as usize].position(DVec3::ZERO),
+            DVec3::new(2.0, -2.0, 0.0)
+        );
         assert_eq!(t[IDENTITY_IMAGE as usize], ImageTransform::IDENTITY);
     }
 }

@@ -11,9 +11,9 @@
 
 use crate::contact::{ContactHistory, ContactTable, PairKinematics};
 use crate::domain::{IDENTITY_IMAGE, IMAGE_COUNT, ImageTransform};
+use crate::measure::{ContactSums, outer};
 use crate::neighbor::NeighborList;
 use crate::particles::Particles;
-use crate::measure::{ContactSums, outer};
 use glam::DVec3;
 use rayon::prelude::*;
 
@@ -169,7 +169,10 @@ fn chunk_forces<const MEASURE: bool>(
             let (v_j, w_j) = if code == IDENTITY_IMAGE {
                 (inp.velocity[j], inp.omega[j])
             } else {
-                (image.velocity(inp.velocity[j]), image.angular_velocity(inp.omega[j]))
+                (
+                    image.velocity(inp.velocity[j]),
+                    image.angular_velocity(inp.omega[j]),
+                )
             };
             let kin = PairKinematics {
                 normal: branch / dist,

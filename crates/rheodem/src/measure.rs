@@ -124,7 +124,8 @@ pub fn angular_momentum(p: &Particles) -> DVec3 {
     (0..p.len())
         .filter(|&i| p.motion[i].is_free())
         .map(|i| {
-            p.position[i].cross(p.velocity[i] * p.mass[i]) + p.angular_velocity[i] / p.inv_inertia[i]
+            p.position[i].cross(p.velocity[i] * p.mass[i])
+                + p.angular_velocity[i] / p.inv_inertia[i]
         })
         .sum()
 }

@@ -99,7 +99,11 @@ impl NeighborList {
     }
 
     /// Whether the list must be rebuilt before the next force evaluation.
-    pub fn needs_rebuild(&self, particles: &Particles, images: &[ImageTransform; IMAGE_COUNT]) -> bool {
+    pub fn needs_rebuild(
+        &self,
+        particles: &Particles,
+        images: &[ImageTransform; IMAGE_COUNT],
+    ) -> bool {
         if self.reference_position.len() != particles.len() {
             return true;
         }
@@ -126,10 +130,18 @@ impl NeighborList {
 
     /// Rebuilds the list: wraps positions into the box, re-sorts particles by cell, finds all
     /// pairs within cutoff and carries the contact history over by particle id.
-    pub fn build(&mut self, particles: &mut Particles, domain: &Domain) -> Result<(), NeighborError> {
+    pub fn build(
+        &mut self,
+        particles: &mut Particles,
+        domain: &Domain,
+    ) -> Result<(), NeighborError> {
         let old = self.history_by_id(particles);
 
-        for (r, v) in particles.position.iter_mut().zip(particles.velocity.iter_mut()) {
+        for (r, v) in particles
+            .position
+            .iter_mut()
+            .zip(particles.velocity.iter_mut())
+        {
             domain.wrap(r, v);
         }
 
@@ -138,7 +150,11 @@ impl NeighborList {
         let grid = CellGrid::new(domain, cutoff)?;
 
         // Stable counting sort by cell: deterministic, and neighbours end up close in memory.
-        let cell_of: Vec<u32> = particles.position.iter().map(|r| grid.cell_index(*r)).collect();
+        let cell_of: Vec<u32> = particles
+            .position
+            .iter()
+            .map(|r| grid.cell_index(*r))
+            .collect();
         let mut start = vec![0u32; grid.count() + 1];
         for &c in &cell_of {
             start[c as usize + 1] += 1;

@@ -107,7 +107,8 @@ impl Particles {
         self.radius.push(s.radius);
         self.mass.push(mass);
         self.inv_mass.push(if free { 1.0 / mass } else { 0.0 });
-        self.inv_inertia.push(if free { 1.0 / inertia } else { 0.0 });
+        self.inv_inertia
+            .push(if free { 1.0 / inertia } else { 0.0 });
         self.species.push(s.species);
         self.motion.push(s.motion);
     }

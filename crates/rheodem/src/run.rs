@@ -12,12 +12,12 @@
 //!
 //! Every file is written atomically (see [`crate::io::atomic`]).
 
+use crate::Simulation;
 use crate::io::atomic::write_atomic;
 use crate::io::{timeseries, vtk};
 use crate::measure::Observables;
 use crate::neighbor::NeighborError;
 use crate::scenario::{Resolved, Scenario, ScenarioError, build};
-use crate::Simulation;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -45,7 +45,9 @@ pub enum RunError {
         reason: String,
     },
     /// The run directory already holds a run.
-    #[error("{0} already holds a run: resume it with `rheodem resume {0}`, or pass --force to start over")]
+    #[error(
+        "{0} already holds a run: resume it with `rheodem resume {0}`, or pass --force to start over"
+    )]
     Exists(PathBuf),
     /// The neighbour search failed (box too small).
     #[error(transparent)]
@@ -67,11 +69,11 @@ pub struct OutputPlan {
 
 impl OutputPlan {
     fn every(steps: u64, count: u64) -> u64 {
-        if count == 0 { 0 } else { (steps / count).max(1) }
+        steps.checked_div(count).map_or(0, |e| e.max(1))
     }
 
     fn due(every: u64, step: u64) -> bool {
-        every != 0 && step % every == 0
+        every != 0 && step.is_multiple_of(every)
     }
 }
 
@@ -128,13 +130,22 @@ struct Summary<'a> {
 const CHECKPOINT_MAGIC: &[u8; 8] = b"RHEODEM1";
 
 fn io_err(path: &Path) -> impl FnOnce(std::io::Error) -> RunError + '_ {
-    move |source| RunError::Io { path: path.to_path_buf(), source }
+    move |source| RunError::Io {
+        path: path.to_path_buf(),
+        source,
+    }
 }
 
 impl Run {
     /// Builds the scenario (relative paths from `base_dir`) and creates the run directory
     /// `dir`, refusing one that already holds a run unless `force`.
-    pub fn start(scenario: Scenario, base_dir: &Path, dir: &Path, threads: usize, force: bool) -> Result<Run, RunError> {
+    pub fn start(
+        scenario: Scenario,
+        base_dir: &Path,
+        dir: &Path,
+        threads: usize,
+        force: bool,
+    ) -> Result<Run, RunError> {
         if dir.join("checkpoint.bin").exists() && !force {
             return Err(RunError::Exists(dir.to_path_buf()));
         }
@@ -163,7 +174,8 @@ impl Run {
             run.scenario.seed
         );
         let path = dir.join("scenario.toml");
-        write_atomic(&path, (header + &run.scenario.to_toml()).as_bytes()).map_err(io_err(&path))?;
+        write_atomic(&path, (header + &run.scenario.to_toml()).as_bytes())
+            .map_err(io_err(&path))?;
         let path = dir.join("resolved.json");
         let json = serde_json::to_string_pretty(&run.resolved).unwrap_or_default();
         write_atomic(&path, json.as_bytes()).map_err(io_err(&path))?;
@@ -176,13 +188,20 @@ impl Run {
     pub fn resume(dir: &Path) -> Result<Run, RunError> {
         let path = dir.join("checkpoint.bin");
         let bytes = std::fs::read(&path).map_err(io_err(&path))?;
-        let bad = |reason: String| RunError::Checkpoint { path: path.clone(), reason };
+        let bad = |reason: String| RunError::Checkpoint {
+            path: path.clone(),
+            reason,
+        };
         let body = bytes
             .strip_prefix(CHECKPOINT_MAGIC.as_slice())
             .ok_or_else(|| bad("missing rheodem checkpoint header".into()))?;
-        let (version, state): (String, Run) = postcard::from_bytes(body).map_err(|e| bad(e.to_string()))?;
+        let (version, state): (String, Run) =
+            postcard::from_bytes(body).map_err(|e| bad(e.to_string()))?;
         if version != crate::VERSION {
-            return Err(bad(format!("written by rheodem {version}, this is {}", crate::VERSION)));
+            return Err(bad(format!(
+                "written by rheodem {version}, this is {}",
+                crate::VERSION
+            )));
         }
         Ok(state)
     }
@@ -194,12 +213,21 @@ impl Run {
 
     /// Steps until the end, reporting progress `(done, total)` after every step and writing
     /// outputs and checkpoints on their cadence; ends with a final checkpoint and summary.
-    pub fn advance(&mut self, dir: &Path, mut progress: impl FnMut(u64, u64)) -> Result<(), RunError> {
+    pub fn advance(
+        &mut self,
+        dir: &Path,
+        mut progress: impl FnMut(u64, u64),
+    ) -> Result<(), RunError> {
         self.advance_until(dir, self.plan.steps, &mut progress)
     }
 
     /// Like [`Run::advance`] but stops after step `stop` (used to test resumption).
-    pub fn advance_until(&mut self, dir: &Path, stop: u64, progress: &mut dyn FnMut(u64, u64)) -> Result<(), RunError> {
+    pub fn advance_until(
+        &mut self,
+        dir: &Path,
+        stop: u64,
+        progress: &mut dyn FnMut(u64, u64),
+    ) -> Result<(), RunError> {
         let stop = stop.min(self.plan.steps);
         let mut clock = Instant::now();
         while self.simulation.step < stop {
@@ -214,7 +242,11 @@ impl Run {
             if OutputPlan::due(self.plan.checkpoint_every, next) || next == self.plan.steps {
                 self.wall_seconds += clock.elapsed().as_secs_f64();
                 clock = Instant::now();
-                let status = if next == self.plan.steps { Status::Completed } else { Status::Running };
+                let status = if next == self.plan.steps {
+                    Status::Completed
+                } else {
+                    Status::Running
+                };
                 self.checkpoint(dir, status)?;
             }
             progress(next, self.plan.steps);
@@ -235,7 +267,11 @@ impl Run {
     fn snapshot(&mut self, dir: &Path) -> Result<(), RunError> {
         let name = format!("snapshots/particles_{:010}.vtp", self.simulation.step);
         let path = dir.join(&name);
-        write_atomic(&path, vtk::particles_vtp(&self.simulation.particles).as_bytes()).map_err(io_err(&path))?;
+        write_atomic(
+            &path,
+            vtk::particles_vtp(&self.simulation.particles).as_bytes(),
+        )
+        .map_err(io_err(&path))?;
         self.snapshots.push((self.simulation.time, name));
         Ok(())
     }
@@ -245,12 +281,15 @@ impl Run {
         let path = dir.join("timeseries.csv");
         write_atomic(&path, timeseries::to_csv(&self.rows).as_bytes()).map_err(io_err(&path))?;
         let path = dir.join("snapshots.pvd");
-        write_atomic(&path, vtk::collection_pvd(&self.snapshots).as_bytes()).map_err(io_err(&path))?;
+        write_atomic(&path, vtk::collection_pvd(&self.snapshots).as_bytes())
+            .map_err(io_err(&path))?;
         let path = dir.join("checkpoint.bin");
         let mut bytes = CHECKPOINT_MAGIC.to_vec();
-        let body = postcard::to_stdvec(&(crate::VERSION.to_string(), self)).map_err(|e| RunError::Checkpoint {
-            path: path.clone(),
-            reason: e.to_string(),
+        let body = postcard::to_stdvec(&(crate::VERSION.to_string(), self)).map_err(|e| {
+            RunError::Checkpoint {
+                path: path.clone(),
+                reason: e.to_string(),
+            }
         })?;
         bytes.extend_from_slice(&body);
         write_atomic(&path, &bytes).map_err(io_err(&path))?;

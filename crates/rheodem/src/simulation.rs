@@ -8,9 +8,7 @@ use crate::contact::ContactTable;
 use crate::domain::Domain;
 use crate::forces::{ForceScratch, pair_forces};
 use crate::integrate::{add_gravity, drift, kick};
-use crate::measure::{
-    ContactSums, Observables, kinetic_energies, kinetic_stress_sum, to_rows,
-};
+use crate::measure::{ContactSums, Observables, kinetic_energies, kinetic_stress_sum, to_rows};
 use crate::neighbor::{NeighborError, NeighborList};
 use crate::particles::Particles;
 use crate::walls::PlaneWall;

@@ -1,8 +1,8 @@
 //! Infinite planar walls: fixed, infinitely heavy, with the contact law of their species.
 
 use crate::contact::{ContactHistory, ContactTable, PairKinematics};
-use crate::particles::Particles;
 use crate::measure::{ContactSums, outer};
+use crate::particles::Particles;
 use glam::DVec3;
 use serde::{Deserialize, Serialize};
 
@@ -36,7 +36,12 @@ impl PlaneWall {
 
     /// Adds the wall's forces and torques to the free particles, advancing contact history
     /// over `dt` (s).
-    pub fn apply(&mut self, particles: &mut Particles, laws: &ContactTable, dt: f64) -> ContactSums {
+    pub fn apply(
+        &mut self,
+        particles: &mut Particles,
+        laws: &ContactTable,
+        dt: f64,
+    ) -> ContactSums {
         let mut obs = ContactSums::default();
         for i in 0..particles.len() {
             if !particles.motion[i].is_free() {

@@ -18,8 +18,16 @@ struct Outcome {
 fn head_on(e: f64, a1: f64, a2: f64, wall: bool, steps_per_contact: f64) -> (Outcome, f64, f64) {
     let v0 = 0.05;
     let gap = 0.002 * (a1 + a2);
-    let mut s1 = sphere(DVec3::new(-(a1 + gap / 2.0), 0.0, 0.0), DVec3::new(v0 / 2.0, 0.0, 0.0), a1);
-    let mut s2 = sphere(DVec3::new(a2 + gap / 2.0, 0.0, 0.0), DVec3::new(-v0 / 2.0, 0.0, 0.0), a2);
+    let mut s1 = sphere(
+        DVec3::new(-(a1 + gap / 2.0), 0.0, 0.0),
+        DVec3::new(v0 / 2.0, 0.0, 0.0),
+        a1,
+    );
+    let mut s2 = sphere(
+        DVec3::new(a2 + gap / 2.0, 0.0, 0.0),
+        DVec3::new(-v0 / 2.0, 0.0, 0.0),
+        a2,
+    );
     if wall {
         s1.velocity.x = v0;
         s2.velocity = DVec3::ZERO;
@@ -64,7 +72,11 @@ fn head_on(e: f64, a1: f64, a2: f64, wall: bool, steps_per_contact: f64) -> (Out
         restitution: -rel_v(&sim) / v_before,
         contact_time: t_end.expect("contact ended") - t_start.expect("contact started"),
     };
-    (outcome, t_c, law.normal.restitution(m_ij).expect("underdamped"))
+    (
+        outcome,
+        t_c,
+        law.normal.restitution(m_ij).expect("underdamped"),
+    )
 }
 
 fn check(e: f64, a1: f64, a2: f64, wall: bool, steps: f64, tol: f64) {

@@ -49,8 +49,8 @@ mod common;
 
 use common::*;
 use glam::DVec3;
-use rheodem::particles::Motion;
 use rheodem::Simulation;
+use rheodem::particles::Motion;
 
 /// Result of one oblique collision, seen from sphere 0 (`i`) against sphere 1 (`j`).
 struct Oblique {
@@ -192,8 +192,8 @@ fn oblique_impact_sticks_throughout() {
         let e_normal = r.vn_after / r.vn_before;
         let expected = -r.e * r.slip_before;
         let err_nominal = (r.slip_after - expected).length() / (r.e * r.slip_before.length());
-        let err_numeric =
-            (r.slip_after + e_normal * r.slip_before).length() / (e_normal * r.slip_before.length());
+        let err_numeric = (r.slip_after + e_normal * r.slip_before).length()
+            / (e_normal * r.slip_before.length());
         eprintln!(
             "stick e={e} mu={mu} wall={wall}: slip {:.6e} -> {:.6e} (ratio {:.6}), normal restitution {:.6}; \
              error vs -e {:.2e}, vs numerical normal restitution {:.2e}",
@@ -204,8 +204,14 @@ fn oblique_impact_sticks_throughout() {
             err_nominal,
             err_numeric
         );
-        assert!(err_numeric < 1e-4, "sticking e={e} wall={wall}: {err_numeric:.3e}");
-        assert!(err_nominal < 3e-3, "sticking e={e} wall={wall}: {err_nominal:.3e}");
+        assert!(
+            err_numeric < 1e-4,
+            "sticking e={e} wall={wall}: {err_numeric:.3e}"
+        );
+        assert!(
+            err_nominal < 3e-3,
+            "sticking e={e} wall={wall}: {err_nominal:.3e}"
+        );
     }
 }
 
@@ -246,9 +252,15 @@ fn oblique_impact_slides_throughout() {
             loss, exact, err_exact, physics, err_physics, turn
         );
         assert!(turn > 1.0 - 1e-6, "slip turned: cos = {turn}");
-        assert!(err_exact < 1e-3, "sliding e={e} wall={wall}: {err_exact:.3e}");
+        assert!(
+            err_exact < 1e-3,
+            "sliding e={e} wall={wall}: {err_exact:.3e}"
+        );
         if e >= 0.9 {
-            assert!(err_physics < 5e-3, "sliding e={e} wall={wall}: {err_physics:.3e}");
+            assert!(
+                err_physics < 5e-3,
+                "sliding e={e} wall={wall}: {err_physics:.3e}"
+            );
         }
     }
 }
@@ -273,7 +285,10 @@ fn oblique_impact_resticks_in_tensile_tail_below_threshold() {
             exact,
             loss / exact - 1.0
         );
-        assert!(loss < (1.0 - 1e-3) * exact, "expected re-sticking in the tensile tail");
+        assert!(
+            loss < (1.0 - 1e-3) * exact,
+            "expected re-sticking in the tensile tail"
+        );
     }
 }
 
@@ -350,8 +365,15 @@ fn sliding_sphere_ends_rolling_at_five_sevenths() {
             steps
         );
         assert!(err < 0.01, "final speed error {err:.3e}");
-        assert!(err_lever < 1e-5, "final speed error vs lever-arm form {err_lever:.3e}");
-        assert!(slip.length() < 1e-4 * v0, "still slipping: {:.3e} m/s", slip.length());
+        assert!(
+            err_lever < 1e-5,
+            "final speed error vs lever-arm form {err_lever:.3e}"
+        );
+        assert!(
+            slip.length() < 1e-4 * v0,
+            "still slipping: {:.3e} m/s",
+            slip.length()
+        );
         assert!(dir_err < 1e-9, "direction changed by {dir_err:.3e}");
         assert!(mid_err < 0.01, "mid-slide speed error {mid_err:.3e}");
     }

@@ -49,7 +49,11 @@ fn fingerprint(run: &Run) -> (Vec<[u64; 9]>, String) {
     let state = slot
         .iter()
         .map(|&s| {
-            let (r, v, w) = (p.position[s as usize], p.velocity[s as usize], p.angular_velocity[s as usize]);
+            let (r, v, w) = (
+                p.position[s as usize],
+                p.velocity[s as usize],
+                p.angular_velocity[s as usize],
+            );
             [r.x, r.y, r.z, v.x, v.y, v.z, w.x, w.y, w.z].map(f64::to_bits)
         })
         .collect();
@@ -71,7 +75,9 @@ fn resumed_run_is_bit_identical() {
     let split_dir = temp_dir("split");
     let mut first = start(&split_dir);
     // Stop at step 1700; the last checkpoint on disk is at step 1500.
-    first.advance_until(&split_dir, 1700, &mut |_, _| {}).expect("run");
+    first
+        .advance_until(&split_dir, 1700, &mut |_, _| {})
+        .expect("run");
     drop(first);
     let mut resumed = Run::resume(&split_dir).expect("checkpoint readable");
     assert_eq!(resumed.simulation.step, 1500);

@@ -45,37 +45,146 @@ fn valid_scenario_builds() {
 fn malformed_scenarios_name_the_key_and_range() {
     // (what is broken, replacement applied to VALID, words the message must contain)
     let cases: &[(&str, (&str, &str), &[&str])] = &[
-        ("unknown key", ("seed = 3", "seed = 3\nsead = 4"), &["unknown field", "sead"]),
-        ("unknown key in a table", ("density = 2000.0", "density = 2000.0\ncolour = 1"), &["colour"]),
-        ("missing run table", ("[run]\nsteps = 10", ""), &["missing field", "run"]),
-        ("negative density", ("density = 2000.0", "density = -1.0"), &["species[0].density", "positive"]),
-        ("restitution above one", ("restitution = 0.8", "restitution = 1.5"), &["contact[0].normal.restitution", "(0, 1]"]),
-        ("two damping laws", ("restitution = 0.8", "restitution = 0.8, damping = 0.1"), &["contact[0].normal", "at most one"]),
-        ("zero stiffness", ("stiffness = 100.0", "stiffness = 0.0"), &["contact[0].normal.stiffness", "positive"]),
-        ("negative friction", ("mu = 0.5", "mu = -0.5"), &["contact[0].friction.mu_static", "≥ 0"]),
-        ("friction without spring", ("stiffness_ratio = 0.2857, damping_ratio = 0.2857, ", ""), &["contact[0].friction.stiffness", "missing"]),
-        ("unknown species", ("species = \"glass\"\ncount", "species = \"sand\"\ncount"), &["particles[0].species", "\"sand\"", "\"glass\""]),
-        ("zero count", ("count = 50", "count = 0"), &["particles[0].count", "[1,"]),
-        ("impossible packing", ("count = 50", "count = 5000"), &["particles[0].count", "impossible packing", "0.35"]),
-        ("polydispersity below one", ("polydispersity = 2.0", "polydispersity = 0.5"), &["particles[0].polydispersity", "[1, 20]"]),
-        ("negative box edge", ("size = [0.02, 0.02, 0.02]", "size = [0.02, -0.02, 0.02]"), &["domain.size[1]", "positive"]),
-        ("box too small for periodic images", ("size = [0.02, 0.02, 0.02]", "size = [0.02, 0.02, 0.005]"), &["domain.size", "too small", "axis z"]),
-        ("time step too large", ("steps = 10", "steps = 10\ndt = 1.0"), &["run.dt", "t_c/10"]),
-        ("no run length", ("steps = 10", "dt_fraction = 0.02"), &["run", "exactly one of `duration`"]),
-        ("both run lengths", ("steps = 10", "steps = 10\nduration = 1.0"), &["run", "exactly one"]),
-        ("unknown particle kind", ("kind = \"random\"", "kind = \"poisson\""), &["unknown variant", "poisson"]),
-        ("wrong type", ("count = 50", "count = \"many\""), &["particles[0]", "\"many\"", "expected usize"]),
-        ("preparation target out of range", ("[run]", "[preparation]\nvolume_fraction = 0.9\n[run]"), &["preparation.volume_fraction", "(0, 0.70]"]),
-        ("missing packing file", ("kind = \"random\"\nspecies = \"glass\"\ncount = 50\nmean_diameter = 2.2e-3\npolydispersity = 2.0", "kind = \"file\"\nspecies = \"glass\"\npath = \"no/such/file.txt\""), &["cannot read", "no/such/file.txt"]),
-        ("overdamped contact", ("restitution = 0.8", "damping = 1000.0"), &["overdamped"]),
-        ("zero wall normal", ("[run]", "[[wall]]\npoint = [0.0, 0.0, 0.0]\nnormal = [0.0, 0.0, 0.0]\nspecies = \"glass\"\n[run]"), &["wall[0].normal", "non-zero"]),
-        ("non-finite gravity", ("seed = 3", "seed = 3\ngravity = [0.0, 0.0, nan]"), &["gravity", "finite"]),
+        (
+            "unknown key",
+            ("seed = 3", "seed = 3\nsead = 4"),
+            &["unknown field", "sead"],
+        ),
+        (
+            "unknown key in a table",
+            ("density = 2000.0", "density = 2000.0\ncolour = 1"),
+            &["colour"],
+        ),
+        (
+            "missing run table",
+            ("[run]\nsteps = 10", ""),
+            &["missing field", "run"],
+        ),
+        (
+            "negative density",
+            ("density = 2000.0", "density = -1.0"),
+            &["species[0].density", "positive"],
+        ),
+        (
+            "restitution above one",
+            ("restitution = 0.8", "restitution = 1.5"),
+            &["contact[0].normal.restitution", "(0, 1]"],
+        ),
+        (
+            "two damping laws",
+            ("restitution = 0.8", "restitution = 0.8, damping = 0.1"),
+            &["contact[0].normal", "at most one"],
+        ),
+        (
+            "zero stiffness",
+            ("stiffness = 100.0", "stiffness = 0.0"),
+            &["contact[0].normal.stiffness", "positive"],
+        ),
+        (
+            "negative friction",
+            ("mu = 0.5", "mu = -0.5"),
+            &["contact[0].friction.mu_static", "≥ 0"],
+        ),
+        (
+            "friction without spring",
+            ("stiffness_ratio = 0.2857, damping_ratio = 0.2857, ", ""),
+            &["contact[0].friction.stiffness", "missing"],
+        ),
+        (
+            "unknown species",
+            ("species = \"glass\"\ncount", "species = \"sand\"\ncount"),
+            &["particles[0].species", "\"sand\"", "\"glass\""],
+        ),
+        (
+            "zero count",
+            ("count = 50", "count = 0"),
+            &["particles[0].count", "[1,"],
+        ),
+        (
+            "impossible packing",
+            ("count = 50", "count = 5000"),
+            &["particles[0].count", "impossible packing", "0.35"],
+        ),
+        (
+            "polydispersity below one",
+            ("polydispersity = 2.0", "polydispersity = 0.5"),
+            &["particles[0].polydispersity", "[1, 20]"],
+        ),
+        (
+            "negative box edge",
+            ("size = [0.02, 0.02, 0.02]", "size = [0.02, -0.02, 0.02]"),
+            &["domain.size[1]", "positive"],
+        ),
+        (
+            "box too small for periodic images",
+            ("size = [0.02, 0.02, 0.02]", "size = [0.02, 0.02, 0.005]"),
+            &["domain.size", "too small", "axis z"],
+        ),
+        (
+            "time step too large",
+            ("steps = 10", "steps = 10\ndt = 1.0"),
+            &["run.dt", "t_c/10"],
+        ),
+        (
+            "no run length",
+            ("steps = 10", "dt_fraction = 0.02"),
+            &["run", "exactly one of `duration`"],
+        ),
+        (
+            "both run lengths",
+            ("steps = 10", "steps = 10\nduration = 1.0"),
+            &["run", "exactly one"],
+        ),
+        (
+            "unknown particle kind",
+            ("kind = \"random\"", "kind = \"poisson\""),
+            &["unknown variant", "poisson"],
+        ),
+        (
+            "wrong type",
+            ("count = 50", "count = \"many\""),
+            &["particles[0]", "\"many\"", "expected usize"],
+        ),
+        (
+            "preparation target out of range",
+            ("[run]", "[preparation]\nvolume_fraction = 0.9\n[run]"),
+            &["preparation.volume_fraction", "(0, 0.70]"],
+        ),
+        (
+            "missing packing file",
+            (
+                "kind = \"random\"\nspecies = \"glass\"\ncount = 50\nmean_diameter = 2.2e-3\npolydispersity = 2.0",
+                "kind = \"file\"\nspecies = \"glass\"\npath = \"no/such/file.txt\"",
+            ),
+            &["cannot read", "no/such/file.txt"],
+        ),
+        (
+            "overdamped contact",
+            ("restitution = 0.8", "damping = 1000.0"),
+            &["overdamped"],
+        ),
+        (
+            "zero wall normal",
+            (
+                "[run]",
+                "[[wall]]\npoint = [0.0, 0.0, 0.0]\nnormal = [0.0, 0.0, 0.0]\nspecies = \"glass\"\n[run]",
+            ),
+            &["wall[0].normal", "non-zero"],
+        ),
+        (
+            "non-finite gravity",
+            ("seed = 3", "seed = 3\ngravity = [0.0, 0.0, nan]"),
+            &["gravity", "finite"],
+        ),
     ];
     for (what, (from, to), needles) in cases {
         assert!(VALID.contains(from), "case `{what}`: pattern not in VALID");
         let msg = error_of(&VALID.replacen(from, to, 1));
         for needle in *needles {
-            assert!(msg.contains(needle), "case `{what}`: message `{msg}` lacks `{needle}`");
+            assert!(
+                msg.contains(needle),
+                "case `{what}`: message `{msg}` lacks `{needle}`"
+            );
         }
     }
 }

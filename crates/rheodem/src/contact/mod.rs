@@ -140,9 +140,9 @@ impl ContactLaw {
             if self.rolling.is_active() {
                 let v_r = -a_eff * w_rel.cross(n);
                 let gamma_r = self.rolling.damping.coefficient(k.reduced_mass);
-                let (f_r, _) = self
-                    .rolling
-                    .update_in_plane(&mut h.rolling, n, v_r, gamma_r, limit_ref, dt);
+                let (f_r, _) =
+                    self.rolling
+                        .update_in_plane(&mut h.rolling, n, v_r, gamma_r, limit_ref, dt);
                 let t = -a_eff * n.cross(f_r);
                 out.torque_i += t;
                 out.torque_j -= t;
@@ -150,9 +150,14 @@ impl ContactLaw {
             if self.torsion.is_active() {
                 let v_o = a_eff * w_rel.dot(n) * n;
                 let gamma_o = self.torsion.damping.coefficient(k.reduced_mass);
-                let (f_o, _) =
-                    self.torsion
-                        .update_along_normal(&mut h.torsion, n, v_o, gamma_o, limit_ref, dt);
+                let (f_o, _) = self.torsion.update_along_normal(
+                    &mut h.torsion,
+                    n,
+                    v_o,
+                    gamma_o,
+                    limit_ref,
+                    dt,
+                );
                 let t = a_eff * f_o;
                 out.torque_i += t;
                 out.torque_j -= t;

@@ -100,7 +100,10 @@ mod tests {
         );
         assert_eq!(
             parse_packing("1 0 0 0\n-1 0 0 0"),
-            Err(PackingError::BadDiameter { line: 2, value: -1.0 })
+            Err(PackingError::BadDiameter {
+                line: 2,
+                value: -1.0
+            })
         );
         assert_eq!(parse_packing("# nothing\n"), Err(PackingError::Empty));
     }

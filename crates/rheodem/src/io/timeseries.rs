@@ -34,7 +34,11 @@ pub fn to_csv(rows: &[Observables]) -> String {
     out.push('\n');
     for o in rows {
         let s = &o.stress;
-        let mu = if s[1][1] != 0.0 { s[0][1].abs() / s[1][1] } else { 0.0 };
+        let mu = if s[1][1] != 0.0 {
+            s[0][1].abs() / s[1][1]
+        } else {
+            0.0
+        };
         let _ = write!(
             out,
             "{:e},{},{:e},{:e},{:e},{:e},{},{:e},{:e},{:e},{:e}",

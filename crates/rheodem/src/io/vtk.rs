@@ -31,19 +31,48 @@ pub fn particles_vtp(p: &Particles) -> String {
         let _ = write!(s, "{k} ");
     }
     s.push_str("\n</DataArray>\n</Verts>\n<PointData Scalars=\"radius\" Vectors=\"velocity\">\n");
-    scalar(&mut s, "id", "Int64", order.iter().map(|&i| p.id[i].to_string()));
-    scalar(&mut s, "radius", "Float64", order.iter().map(|&i| format!("{:e}", p.radius[i])));
-    scalar(&mut s, "species", "Int32", order.iter().map(|&i| p.species[i].to_string()));
-    scalar(&mut s, "free", "Int32", order.iter().map(|&i| u8::from(p.motion[i].is_free()).to_string()));
+    scalar(
+        &mut s,
+        "id",
+        "Int64",
+        order.iter().map(|&i| p.id[i].to_string()),
+    );
+    scalar(
+        &mut s,
+        "radius",
+        "Float64",
+        order.iter().map(|&i| format!("{:e}", p.radius[i])),
+    );
+    scalar(
+        &mut s,
+        "species",
+        "Int32",
+        order.iter().map(|&i| p.species[i].to_string()),
+    );
+    scalar(
+        &mut s,
+        "free",
+        "Int32",
+        order
+            .iter()
+            .map(|&i| u8::from(p.motion[i].is_free()).to_string()),
+    );
     vector(&mut s, "velocity", order.iter().map(|&i| p.velocity[i]));
-    vector(&mut s, "angular_velocity", order.iter().map(|&i| p.angular_velocity[i]));
+    vector(
+        &mut s,
+        "angular_velocity",
+        order.iter().map(|&i| p.angular_velocity[i]),
+    );
     vector(&mut s, "force", order.iter().map(|&i| p.force[i]));
     s.push_str("</PointData>\n</Piece>\n</PolyData>\n</VTKFile>\n");
     s
 }
 
 fn scalar(s: &mut String, name: &str, ty: &str, values: impl Iterator<Item = String>) {
-    let _ = writeln!(s, "<DataArray type=\"{ty}\" Name=\"{name}\" format=\"ascii\">");
+    let _ = writeln!(
+        s,
+        "<DataArray type=\"{ty}\" Name=\"{name}\" format=\"ascii\">"
+    );
     for v in values {
         s.push_str(&v);
         s.push(' ');
@@ -52,7 +81,10 @@ fn scalar(s: &mut String, name: &str, ty: &str, values: impl Iterator<Item = Str
 }
 
 fn vector(s: &mut String, name: &str, values: impl Iterator<Item = glam::DVec3>) {
-    let _ = writeln!(s, "<DataArray type=\"Float64\" Name=\"{name}\" NumberOfComponents=\"3\" format=\"ascii\">");
+    let _ = writeln!(
+        s,
+        "<DataArray type=\"Float64\" Name=\"{name}\" NumberOfComponents=\"3\" format=\"ascii\">"
+    );
     for v in values {
         let _ = writeln!(s, "{:e} {:e} {:e}", v.x, v.y, v.z);
     }

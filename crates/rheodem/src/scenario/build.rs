@@ -80,7 +80,11 @@ fn finite3(key: &str, v: [f64; 3]) -> Result<DVec3, ScenarioError> {
     if v.iter().all(|x| x.is_finite()) {
         Ok(DVec3::from_array(v))
     } else {
-        Err(invalid(key, format!("{v:?}"), "all three components must be finite"))
+        Err(invalid(
+            key,
+            format!("{v:?}"),
+            "all three components must be finite",
+        ))
     }
 }
 
@@ -99,23 +103,34 @@ fn at_most_one(key: &str, names: &[(&str, bool)]) -> Result<(), ScenarioError> {
         return Err(invalid(
             key,
             given.join(" and "),
-            format!("give at most one of {}", names.iter().map(|(n, _)| *n).collect::<Vec<_>>().join(", ")),
+            format!(
+                "give at most one of {}",
+                names.iter().map(|(n, _)| *n).collect::<Vec<_>>().join(", ")
+            ),
         ));
     }
     Ok(())
 }
 
 fn species_index(key: &str, name: &str, species: &[SpeciesSpec]) -> Result<u16, ScenarioError> {
-    species.iter().position(|s| s.name == name).map(|i| i as u16).ok_or_else(|| {
-        invalid(
-            key,
-            format!("\"{name}\""),
-            format!(
-                "must name a declared species ({})",
-                species.iter().map(|s| format!("\"{}\"", s.name)).collect::<Vec<_>>().join(", ")
-            ),
-        )
-    })
+    species
+        .iter()
+        .position(|s| s.name == name)
+        .map(|i| i as u16)
+        .ok_or_else(|| {
+            invalid(
+                key,
+                format!("\"{name}\""),
+                format!(
+                    "must name a declared species ({})",
+                    species
+                        .iter()
+                        .map(|s| format!("\"{}\"", s.name))
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                ),
+            )
+        })
 }
 
 fn normal_law(key: &str, n: &NormalSpec) -> Result<NormalLaw, ScenarioError> {
@@ -130,9 +145,17 @@ fn normal_law(key: &str, n: &NormalSpec) -> Result<NormalLaw, ScenarioError> {
     )?;
     let damping = if let Some(e) = n.restitution {
         if !(e > 0.0 && e <= 1.0) {
-            return Err(invalid(format!("{key}.restitution"), e, "must lie in (0, 1]"));
+            return Err(invalid(
+                format!("{key}.restitution"),
+                e,
+                "must lie in (0, 1]",
+            ));
         }
-        if e == 1.0 { Damping::NONE } else { Damping::from_restitution(e, k) }
+        if e == 1.0 {
+            Damping::NONE
+        } else {
+            Damping::from_restitution(e, k)
+        }
     } else if let Some(g) = n.damping {
         Damping {
             fixed: non_negative(&format!("{key}.damping"), g)?,
@@ -146,19 +169,36 @@ fn normal_law(key: &str, n: &NormalSpec) -> Result<NormalLaw, ScenarioError> {
     } else {
         Damping::NONE
     };
-    Ok(NormalLaw { stiffness: k, damping })
+    Ok(NormalLaw {
+        stiffness: k,
+        damping,
+    })
 }
 
-fn resistance(key: &str, r: &Option<ResistanceSpec>, normal: &NormalLaw) -> Result<Resistance, ScenarioError> {
+fn resistance(
+    key: &str,
+    r: &Option<ResistanceSpec>,
+    normal: &NormalLaw,
+) -> Result<Resistance, ScenarioError> {
     let Some(r) = r else {
         return Ok(Resistance::NONE);
     };
-    at_most_one(key, &[("stiffness", r.stiffness.is_some()), ("stiffness_ratio", r.stiffness_ratio.is_some())])?;
+    at_most_one(
+        key,
+        &[
+            ("stiffness", r.stiffness.is_some()),
+            ("stiffness_ratio", r.stiffness_ratio.is_some()),
+        ],
+    )?;
     let stiffness = match (r.stiffness, r.stiffness_ratio) {
         (Some(k), _) => non_negative(&format!("{key}.stiffness"), k)?,
         (None, Some(q)) => non_negative(&format!("{key}.stiffness_ratio"), q)? * normal.stiffness,
         (None, None) => {
-            return Err(invalid(format!("{key}.stiffness"), "(missing)", "give `stiffness` (N/m) or `stiffness_ratio` (fraction of k_n)"));
+            return Err(invalid(
+                format!("{key}.stiffness"),
+                "(missing)",
+                "give `stiffness` (N/m) or `stiffness_ratio` (fraction of k_n)",
+            ));
         }
     };
     at_most_one(
@@ -170,11 +210,19 @@ fn resistance(key: &str, r: &Option<ResistanceSpec>, normal: &NormalLaw) -> Resu
         ],
     )?;
     let damping = if let Some(g) = r.damping {
-        Damping { fixed: non_negative(&format!("{key}.damping"), g)?, ..Damping::NONE }
+        Damping {
+            fixed: non_negative(&format!("{key}.damping"), g)?,
+            ..Damping::NONE
+        }
     } else if let Some(q) = r.damping_ratio {
-        normal.damping.scaled(non_negative(&format!("{key}.damping_ratio"), q)?)
+        normal
+            .damping
+            .scaled(non_negative(&format!("{key}.damping_ratio"), q)?)
     } else if let Some(g) = r.damping_per_mass {
-        Damping { per_mass: non_negative(&format!("{key}.damping_per_mass"), g)?, ..Damping::NONE }
+        Damping {
+            per_mass: non_negative(&format!("{key}.damping_per_mass"), g)?,
+            ..Damping::NONE
+        }
     } else {
         Damping::NONE
     };
@@ -183,21 +231,42 @@ fn resistance(key: &str, r: &Option<ResistanceSpec>, normal: &NormalLaw) -> Resu
         (None, Some(s), Some(d)) => (s, d),
         (None, Some(s), None) => (s, s),
         (None, None, None) => {
-            return Err(invalid(format!("{key}.mu"), "(missing)", "give `mu`, or `mu_static` and `mu_dynamic`"));
+            return Err(invalid(
+                format!("{key}.mu"),
+                "(missing)",
+                "give `mu`, or `mu_static` and `mu_dynamic`",
+            ));
         }
         _ => {
-            return Err(invalid(key, "mu with mu_static/mu_dynamic", "give either `mu` or `mu_static` (and `mu_dynamic`), not both"));
+            return Err(invalid(
+                key,
+                "mu with mu_static/mu_dynamic",
+                "give either `mu` or `mu_static` (and `mu_dynamic`), not both",
+            ));
         }
     };
     let mu_s = non_negative(&format!("{key}.mu_static"), mu_s)?;
     let mu_d = non_negative(&format!("{key}.mu_dynamic"), mu_d)?;
     if mu_d > mu_s {
-        return Err(invalid(format!("{key}.mu_dynamic"), mu_d, format!("must not exceed mu_static = {mu_s}")));
+        return Err(invalid(
+            format!("{key}.mu_dynamic"),
+            mu_d,
+            format!("must not exceed mu_static = {mu_s}"),
+        ));
     }
     if stiffness == 0.0 && damping.is_zero() && mu_s > 0.0 {
-        return Err(invalid(format!("{key}.stiffness"), 0, "a resistance with a Coulomb limit needs a spring or a dashpot"));
+        return Err(invalid(
+            format!("{key}.stiffness"),
+            0,
+            "a resistance with a Coulomb limit needs a spring or a dashpot",
+        ));
     }
-    Ok(Resistance { stiffness, damping, mu_static: mu_s, mu_dynamic: mu_d })
+    Ok(Resistance {
+        stiffness,
+        damping,
+        mu_static: mu_s,
+        mu_dynamic: mu_d,
+    })
 }
 
 fn contact_table(s: &Scenario) -> Result<ContactTable, ScenarioError> {
@@ -219,18 +288,28 @@ fn contact_table(s: &Scenario) -> Result<ContactTable, ScenarioError> {
     for (key, pair, law) in &laws {
         if pair.is_none() {
             if table.is_some() {
-                return Err(invalid(format!("{key}.species"), "(missing)", "only one default [[contact]] (without `species`) is allowed"));
+                return Err(invalid(
+                    format!("{key}.species"),
+                    "(missing)",
+                    "only one default [[contact]] (without `species`) is allowed",
+                ));
             }
             table = Some(ContactTable::uniform(ns, *law));
         }
     }
     let mut table = table.unwrap_or_else(|| {
-        ContactTable::uniform(ns, laws.first().map(|l| l.2).unwrap_or(ContactLaw {
-            normal: NormalLaw { stiffness: 1.0, damping: Damping::NONE },
-            tangential: Resistance::NONE,
-            rolling: Resistance::NONE,
-            torsion: Resistance::NONE,
-        }))
+        ContactTable::uniform(
+            ns,
+            laws.first().map(|l| l.2).unwrap_or(ContactLaw {
+                normal: NormalLaw {
+                    stiffness: 1.0,
+                    damping: Damping::NONE,
+                },
+                tangential: Resistance::NONE,
+                rolling: Resistance::NONE,
+                torsion: Resistance::NONE,
+            }),
+        )
     });
     let default_given = laws.iter().any(|l| l.1.is_none());
     for (key, pair, law) in &laws {
@@ -238,7 +317,11 @@ fn contact_table(s: &Scenario) -> Result<ContactTable, ScenarioError> {
             let ia = species_index(&format!("{key}.species[0]"), a, &s.species)? as usize;
             let ib = species_index(&format!("{key}.species[1]"), b, &s.species)? as usize;
             if set[ia * ns + ib] {
-                return Err(invalid(format!("{key}.species"), format!("[\"{a}\", \"{b}\"]"), "this pair already has a contact law"));
+                return Err(invalid(
+                    format!("{key}.species"),
+                    format!("[\"{a}\", \"{b}\"]"),
+                    "this pair already has a contact law",
+                ));
             }
             set[ia * ns + ib] = true;
             set[ib * ns + ia] = true;
@@ -251,7 +334,10 @@ fn contact_table(s: &Scenario) -> Result<ContactTable, ScenarioError> {
                 if !set[a * ns + b] {
                     return Err(invalid(
                         "contact",
-                        format!("no law for [\"{}\", \"{}\"]", s.species[a].name, s.species[b].name),
+                        format!(
+                            "no law for [\"{}\", \"{}\"]",
+                            s.species[a].name, s.species[b].name
+                        ),
                         "give a default [[contact]] without `species`, or one for every species pair",
                     ));
                 }
@@ -265,10 +351,22 @@ fn motion(key: &str, m: &MotionSpec) -> Result<Motion, ScenarioError> {
     Ok(match m {
         MotionSpec::Free => Motion::Free,
         MotionSpec::Fixed => Motion::Fixed,
-        MotionSpec::Rotating { center, axis, omega } => Motion::Rotating {
+        MotionSpec::Rotating {
+            center,
+            axis,
+            omega,
+        } => Motion::Rotating {
             center: finite3(&format!("{key}.rotating.center"), *center)?,
             axis: unit3(&format!("{key}.rotating.axis"), *axis)?,
-            omega: if omega.is_finite() { *omega } else { return Err(invalid(format!("{key}.rotating.omega"), omega, "must be finite")) },
+            omega: if omega.is_finite() {
+                *omega
+            } else {
+                return Err(invalid(
+                    format!("{key}.rotating.omega"),
+                    omega,
+                    "must be finite",
+                ));
+            },
         },
     })
 }
@@ -286,14 +384,22 @@ pub fn build(s: &Scenario, base_dir: &Path) -> Result<Built, ScenarioError> {
     for (k, sp) in s.species.iter().enumerate() {
         positive(&format!("species[{k}].density"), sp.density)?;
         if s.species[..k].iter().any(|o| o.name == sp.name) {
-            return Err(invalid(format!("species[{k}].name"), format!("\"{}\"", sp.name), "species names must be unique"));
+            return Err(invalid(
+                format!("species[{k}].name"),
+                format!("\"{}\"", sp.name),
+                "species names must be unique",
+            ));
         }
     }
     if s.species.len() > u16::MAX as usize {
         return Err(invalid("species", s.species.len(), "at most 65535 species"));
     }
     if s.contacts.is_empty() {
-        return Err(invalid("contact", "[]", "give at least one [[contact]] law"));
+        return Err(invalid(
+            "contact",
+            "[]",
+            "give at least one [[contact]] law",
+        ));
     }
     let laws = contact_table(s)?;
     let gravity = finite3("gravity", s.gravity)?;
@@ -304,7 +410,10 @@ pub fn build(s: &Scenario, base_dir: &Path) -> Result<Built, ScenarioError> {
     let mut size = s.domain.size;
     if size.is_none() {
         for g in &s.particles {
-            if let ParticleGroup::File { path, length_scale, .. } = g {
+            if let ParticleGroup::File {
+                path, length_scale, ..
+            } = g
+            {
                 let text = read(base_dir, path)?;
                 if let Ok(p) = parse_packing(&text) {
                     size = p.box_edge.map(|e| [e * length_scale; 3]);
@@ -314,12 +423,20 @@ pub fn build(s: &Scenario, base_dir: &Path) -> Result<Built, ScenarioError> {
         }
     }
     let Some(size) = size else {
-        return Err(invalid("domain.size", "(missing)", "give the box edges [Lx, Ly, Lz] in m (or read a packing file whose header gives `# L <edge>`)"));
+        return Err(invalid(
+            "domain.size",
+            "(missing)",
+            "give the box edges [Lx, Ly, Lz] in m (or read a packing file whose header gives `# L <edge>`)",
+        ));
     };
     for (a, &l) in size.iter().enumerate() {
         positive(&format!("domain.size[{a}]"), l)?;
     }
-    let domain = Domain { lo, hi: lo + DVec3::from_array(size), periodic: s.domain.periodic };
+    let domain = Domain {
+        lo,
+        hi: lo + DVec3::from_array(size),
+        periodic: s.domain.periodic,
+    };
 
     let mut particles = Particles::default();
     let mut distribution = Vec::new();
@@ -327,24 +444,39 @@ pub fn build(s: &Scenario, base_dir: &Path) -> Result<Built, ScenarioError> {
     for (k, w) in s.walls.iter().enumerate() {
         let key = format!("wall[{k}]");
         let species = species_index(&format!("{key}.species"), &w.species, &s.species)?;
-        walls.push((finite3(&format!("{key}.point"), w.point)?, unit3(&format!("{key}.normal"), w.normal)?, species));
+        walls.push((
+            finite3(&format!("{key}.point"), w.point)?,
+            unit3(&format!("{key}.normal"), w.normal)?,
+            species,
+        ));
     }
 
     for (k, g) in s.particles.iter().enumerate() {
         let key = format!("particles[{k}]");
         match g {
-            ParticleGroup::Explicit { species, motion: m, spheres } => {
+            ParticleGroup::Explicit {
+                species,
+                motion: m,
+                spheres,
+            } => {
                 let sp = species_index(&format!("{key}.species"), species, &s.species)?;
                 let motion = motion(&format!("{key}.motion"), m)?;
                 if spheres.is_empty() {
-                    return Err(invalid(format!("{key}.spheres"), "[]", "list at least one sphere"));
+                    return Err(invalid(
+                        format!("{key}.spheres"),
+                        "[]",
+                        "list at least one sphere",
+                    ));
                 }
                 for (n, sph) in spheres.iter().enumerate() {
                     let skey = format!("{key}.spheres[{n}]");
                     let sphere = Sphere {
                         position: finite3(&format!("{skey}.position"), sph.position)?,
                         velocity: finite3(&format!("{skey}.velocity"), sph.velocity)?,
-                        angular_velocity: finite3(&format!("{skey}.angular_velocity"), sph.angular_velocity)?,
+                        angular_velocity: finite3(
+                            &format!("{skey}.angular_velocity"),
+                            sph.angular_velocity,
+                        )?,
                         radius: positive(&format!("{skey}.radius"), sph.radius)?,
                         species: sp,
                         motion,
@@ -353,19 +485,36 @@ pub fn build(s: &Scenario, base_dir: &Path) -> Result<Built, ScenarioError> {
                 }
                 distribution.push(format!("{key}: {} explicit spheres", spheres.len()));
             }
-            ParticleGroup::Random { species, count, mean_diameter, polydispersity, velocity_spread } => {
+            ParticleGroup::Random {
+                species,
+                count,
+                mean_diameter,
+                polydispersity,
+                velocity_spread,
+            } => {
                 let sp = species_index(&format!("{key}.species"), species, &s.species)?;
                 if *count == 0 || *count > MAX_PARTICLES {
-                    return Err(invalid(format!("{key}.count"), count, format!("must lie in [1, {MAX_PARTICLES}]")));
+                    return Err(invalid(
+                        format!("{key}.count"),
+                        count,
+                        format!("must lie in [1, {MAX_PARTICLES}]"),
+                    ));
                 }
                 let d = positive(&format!("{key}.mean_diameter"), *mean_diameter)?;
                 let w = *polydispersity;
                 if !(w.is_finite() && (1.0..=20.0).contains(&w)) {
-                    return Err(invalid(format!("{key}.polydispersity"), w, "the width ratio w = r_max/r_min must lie in [1, 20]"));
+                    return Err(invalid(
+                        format!("{key}.polydispersity"),
+                        w,
+                        "the width ratio w = r_max/r_min must lie in [1, 20]",
+                    ));
                 }
                 let spread = non_negative(&format!("{key}.velocity_spread"), *velocity_spread)?;
                 let radii = polydisperse_radii(&mut rng, *count, d, w);
-                let group_volume: f64 = radii.iter().map(|r| 4.0 / 3.0 * std::f64::consts::PI * r.powi(3)).sum();
+                let group_volume: f64 = radii
+                    .iter()
+                    .map(|r| 4.0 / 3.0 * std::f64::consts::PI * r.powi(3))
+                    .sum();
                 let fraction = (group_volume + particles.free_volume()) / domain.volume();
                 if fraction > MAX_INSERTION_FRACTION {
                     return Err(invalid(
@@ -407,12 +556,23 @@ pub fn build(s: &Scenario, base_dir: &Path) -> Result<Built, ScenarioError> {
                     "{key}: {count} radii uniform in [d_p/(1+w), w d_p/(1+w)] with d_p = {d:e} m, w = {w}"
                 ));
             }
-            ParticleGroup::File { species, path, length_scale, motion: m } => {
+            ParticleGroup::File {
+                species,
+                path,
+                length_scale,
+                motion: m,
+            } => {
                 let sp = species_index(&format!("{key}.species"), species, &s.species)?;
                 let scale = positive(&format!("{key}.length_scale"), *length_scale)?;
                 let motion = motion(&format!("{key}.motion"), m)?;
                 let text = read(base_dir, path)?;
-                let packing = parse_packing(&text).map_err(|e| invalid(format!("{key}.path"), format!("\"{path}\""), format!("not a valid packing file: {e}")))?;
+                let packing = parse_packing(&text).map_err(|e| {
+                    invalid(
+                        format!("{key}.path"),
+                        format!("\"{path}\""),
+                        format!("not a valid packing file: {e}"),
+                    )
+                })?;
                 for (diameter, r) in &packing.spheres {
                     particles.push(
                         Sphere {
@@ -426,9 +586,20 @@ pub fn build(s: &Scenario, base_dir: &Path) -> Result<Built, ScenarioError> {
                         s.species[sp as usize].density,
                     );
                 }
-                distribution.push(format!("{key}: {} spheres read from {path}", packing.spheres.len()));
+                distribution.push(format!(
+                    "{key}: {} spheres read from {path}",
+                    packing.spheres.len()
+                ));
             }
-            ParticleGroup::Lattice { species, origin, edge_a, edge_b, radius, spacing, motion: m } => {
+            ParticleGroup::Lattice {
+                species,
+                origin,
+                edge_a,
+                edge_b,
+                radius,
+                spacing,
+                motion: m,
+            } => {
                 let sp = species_index(&format!("{key}.species"), species, &s.species)?;
                 let a = positive(&format!("{key}.radius"), *radius)?;
                 let h = positive(&format!("{key}.spacing"), spacing.unwrap_or(2.0 * a))?;
@@ -436,18 +607,37 @@ pub fn build(s: &Scenario, base_dir: &Path) -> Result<Built, ScenarioError> {
                 let ea = finite3(&format!("{key}.edge_a"), *edge_a)?;
                 let eb = finite3(&format!("{key}.edge_b"), *edge_b)?;
                 if ea.cross(eb).length() == 0.0 {
-                    return Err(invalid(format!("{key}.edge_b"), format!("{edge_b:?}"), "the two edges must span a parallelogram (non-zero, not parallel)"));
+                    return Err(invalid(
+                        format!("{key}.edge_b"),
+                        format!("{edge_b:?}"),
+                        "the two edges must span a parallelogram (non-zero, not parallel)",
+                    ));
                 }
-                let (na, nb) = ((ea.length() / h).floor() as usize + 1, (eb.length() / h).floor() as usize + 1);
+                let (na, nb) = (
+                    (ea.length() / h).floor() as usize + 1,
+                    (eb.length() / h).floor() as usize + 1,
+                );
                 if na.saturating_mul(nb) > MAX_PARTICLES {
-                    return Err(invalid(format!("{key}.spacing"), h, "too many lattice spheres; use a larger spacing"));
+                    return Err(invalid(
+                        format!("{key}.spacing"),
+                        h,
+                        "too many lattice spheres; use a larger spacing",
+                    ));
                 }
                 let motion = motion(&format!("{key}.motion"), m)?;
                 for u in 0..na {
                     for v in 0..nb {
-                        let r = o + ea.normalize() * (u as f64 * h) + eb.normalize() * (v as f64 * h);
+                        let r =
+                            o + ea.normalize() * (u as f64 * h) + eb.normalize() * (v as f64 * h);
                         particles.push(
-                            Sphere { position: r, velocity: DVec3::ZERO, angular_velocity: DVec3::ZERO, radius: a, species: sp, motion },
+                            Sphere {
+                                position: r,
+                                velocity: DVec3::ZERO,
+                                angular_velocity: DVec3::ZERO,
+                                radius: a,
+                                species: sp,
+                                motion,
+                            },
                             s.species[sp as usize].density,
                         );
                     }
@@ -457,20 +647,45 @@ pub fn build(s: &Scenario, base_dir: &Path) -> Result<Built, ScenarioError> {
         }
     }
     if particles.free_count() == 0 {
-        return Err(invalid("particles", particles.len(), "the scenario needs at least one free particle"));
+        return Err(invalid(
+            "particles",
+            particles.len(),
+            "the scenario needs at least one free particle",
+        ));
     }
     if particles.len() > MAX_PARTICLES {
-        return Err(invalid("particles", particles.len(), format!("at most {MAX_PARTICLES} particles")));
+        return Err(invalid(
+            "particles",
+            particles.len(),
+            format!("at most {MAX_PARTICLES} particles"),
+        ));
     }
 
-    let plane_walls: Vec<PlaneWall> = walls.iter().map(|(p, n, sp)| PlaneWall::new(*p, *n, *sp, particles.len())).collect();
-    let t_c = shortest_contact_time(&particles, &laws, &plane_walls).map_err(|e| invalid("contact", "(laws)", e.to_string()))?;
-    at_most_one("run", &[("dt", s.run.dt.is_some()), ("dt_fraction", s.run.dt_fraction.is_some())])?;
+    let plane_walls: Vec<PlaneWall> = walls
+        .iter()
+        .map(|(p, n, sp)| PlaneWall::new(*p, *n, *sp, particles.len()))
+        .collect();
+    let t_c = shortest_contact_time(&particles, &laws, &plane_walls)
+        .map_err(|e| invalid("contact", "(laws)", e.to_string()))?;
+    at_most_one(
+        "run",
+        &[
+            ("dt", s.run.dt.is_some()),
+            ("dt_fraction", s.run.dt_fraction.is_some()),
+        ],
+    )?;
     let dt = match (s.run.dt, s.run.dt_fraction) {
         (Some(dt), _) => {
             let dt = positive("run.dt", dt)?;
             if dt > MAX_FRACTION * t_c {
-                return Err(invalid("run.dt", dt, format!("must not exceed t_c/10 = {:e} s (t_c = {t_c:e} s, the shortest contact time)", MAX_FRACTION * t_c)));
+                return Err(invalid(
+                    "run.dt",
+                    dt,
+                    format!(
+                        "must not exceed t_c/10 = {:e} s (t_c = {t_c:e} s, the shortest contact time)",
+                        MAX_FRACTION * t_c
+                    ),
+                ));
             }
             dt
         }
@@ -487,22 +702,41 @@ pub fn build(s: &Scenario, base_dir: &Path) -> Result<Built, ScenarioError> {
             let t = positive("run.duration", t)?;
             let n = (t / dt).round().max(1.0);
             if n > 1e13 {
-                return Err(invalid("run.duration", t, format!("needs {n:e} steps of {dt:e} s; at most 1e13")));
+                return Err(invalid(
+                    "run.duration",
+                    t,
+                    format!("needs {n:e} steps of {dt:e} s; at most 1e13"),
+                ));
             }
             n as u64
         }
         (None, Some(0)) => return Err(invalid("run.steps", 0, "must be at least 1")),
         (None, Some(n)) => n,
-        _ => return Err(invalid("run", "duration/steps", "give exactly one of `duration` (s) and `steps`")),
+        _ => {
+            return Err(invalid(
+                "run",
+                "duration/steps",
+                "give exactly one of `duration` (s) and `steps`",
+            ));
+        }
     };
     if s.output.timeseries_rows == 0 {
         return Err(invalid("output.timeseries_rows", 0, "must be at least 1"));
     }
 
-    let free: Vec<usize> = (0..particles.len()).filter(|&i| particles.motion[i].is_free()).collect();
-    let r_min = free.iter().map(|&i| particles.radius[i]).fold(f64::INFINITY, f64::min);
-    let r_max = free.iter().map(|&i| particles.radius[i]).fold(0.0, f64::max);
-    let mean_diameter = 2.0 * free.iter().map(|&i| particles.radius[i]).sum::<f64>() / free.len() as f64;
+    let free: Vec<usize> = (0..particles.len())
+        .filter(|&i| particles.motion[i].is_free())
+        .collect();
+    let r_min = free
+        .iter()
+        .map(|&i| particles.radius[i])
+        .fold(f64::INFINITY, f64::min);
+    let r_max = free
+        .iter()
+        .map(|&i| particles.radius[i])
+        .fold(0.0, f64::max);
+    let mean_diameter =
+        2.0 * free.iter().map(|&i| particles.radius[i]).sum::<f64>() / free.len() as f64;
     let skin = match s.neighbor.skin {
         Some(v) => positive("neighbor.skin", v)?,
         None => 0.4 * r_min,
@@ -511,36 +745,75 @@ pub fn build(s: &Scenario, base_dir: &Path) -> Result<Built, ScenarioError> {
     let target = match &s.preparation {
         None => None,
         Some(p) => {
-            at_most_one("preparation", &[("volume_fraction", p.volume_fraction.is_some()), ("pressure", p.pressure.is_some())])?;
+            at_most_one(
+                "preparation",
+                &[
+                    ("volume_fraction", p.volume_fraction.is_some()),
+                    ("pressure", p.pressure.is_some()),
+                ],
+            )?;
             let target = match (p.volume_fraction, p.pressure) {
                 (Some(phi), None) if phi > 0.0 && phi <= 0.70 => Target::VolumeFraction(phi),
-                (Some(phi), None) => return Err(invalid("preparation.volume_fraction", phi, "must lie in (0, 0.70]")),
+                (Some(phi), None) => {
+                    return Err(invalid(
+                        "preparation.volume_fraction",
+                        phi,
+                        "must lie in (0, 0.70]",
+                    ));
+                }
                 (None, Some(pr)) => Target::Pressure(positive("preparation.pressure", pr)?),
-                _ => return Err(invalid("preparation", "{}", "give `volume_fraction` or `pressure`")),
+                _ => {
+                    return Err(invalid(
+                        "preparation",
+                        "{}",
+                        "give `volume_fraction` or `pressure`",
+                    ));
+                }
             };
             if s.domain.periodic != [true; 3] {
-                return Err(invalid("domain.periodic", format!("{:?}", s.domain.periodic), "[preparation] compresses the box, which needs periodic = [true, true, true]"));
+                return Err(invalid(
+                    "domain.periodic",
+                    format!("{:?}", s.domain.periodic),
+                    "[preparation] compresses the box, which needs periodic = [true, true, true]",
+                ));
             }
             if !s.walls.is_empty() || particles.free_count() != particles.len() {
-                return Err(invalid("preparation", "(with walls)", "[preparation] compresses a box of free particles only: remove walls and prescribed particles"));
+                return Err(invalid(
+                    "preparation",
+                    "(with walls)",
+                    "[preparation] compresses a box of free particles only: remove walls and prescribed particles",
+                ));
             }
             let rate = p.strain_per_contact_time.unwrap_or(2e-3);
             if !(rate > 0.0 && rate <= 0.1) {
-                return Err(invalid("preparation.strain_per_contact_time", rate, "must lie in (0, 0.1]"));
+                return Err(invalid(
+                    "preparation.strain_per_contact_time",
+                    rate,
+                    "must lie in (0, 0.1]",
+                ));
             }
-            let relax = non_negative("preparation.relax_contact_times", p.relax_contact_times.unwrap_or(200.0))?;
+            let relax = non_negative(
+                "preparation.relax_contact_times",
+                p.relax_contact_times.unwrap_or(200.0),
+            )?;
             Some((target, rate / t_c, (relax * t_c / dt).round() as u64))
         }
     };
 
     let box_error = |e: NeighborError| invalid("domain.size", format!("{size:?}"), e.to_string());
-    let mut simulation = Simulation::new(particles, domain, laws, plane_walls, gravity, dt, skin, 0.0).map_err(box_error)?;
+    let mut simulation =
+        Simulation::new(particles, domain, laws, plane_walls, gravity, dt, skin, 0.0)
+            .map_err(box_error)?;
     let preparation = match target {
         None => None,
-        Some((target, strain_rate, relax_steps)) => Some(prepare(&mut simulation, target, strain_rate, relax_steps).map_err(|e| match e {
-            super::prepare::PrepareError::Neighbor(e) => box_error(e),
-            super::prepare::PrepareError::Unreachable(msg) => invalid("preparation", "(target)", msg),
-        })?),
+        Some((target, strain_rate, relax_steps)) => Some(
+            prepare(&mut simulation, target, strain_rate, relax_steps).map_err(|e| match e {
+                super::prepare::PrepareError::Neighbor(e) => box_error(e),
+                super::prepare::PrepareError::Unreachable(msg) => {
+                    invalid("preparation", "(target)", msg)
+                }
+            })?,
+        ),
     };
     let obs = simulation.observables();
     let resolved = Resolved {
@@ -559,7 +832,10 @@ pub fn build(s: &Scenario, base_dir: &Path) -> Result<Built, ScenarioError> {
         box_size: simulation.domain.lengths().to_array(),
         preparation,
     };
-    Ok(Built { simulation, resolved })
+    Ok(Built {
+        simulation,
+        resolved,
+    })
 }
 
 fn read(base_dir: &Path, path: &str) -> Result<String, ScenarioError> {

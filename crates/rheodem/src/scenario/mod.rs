@@ -38,7 +38,11 @@ pub enum ScenarioError {
 }
 
 /// Shorthand for an [`ScenarioError::Invalid`].
-pub(crate) fn invalid(key: impl Into<String>, value: impl ToString, allowed: impl Into<String>) -> ScenarioError {
+pub(crate) fn invalid(
+    key: impl Into<String>,
+    value: impl ToString,
+    allowed: impl Into<String>,
+) -> ScenarioError {
     ScenarioError::Invalid {
         key: key.into(),
         value: value.to_string(),
@@ -50,7 +54,8 @@ impl Scenario {
     /// Parses a scenario from TOML text (no validation beyond the format).
     /// Errors name the key path (e.g. `particles[0].count`) and the line.
     pub fn from_toml(text: &str) -> Result<Scenario, ScenarioError> {
-        let de = toml::Deserializer::parse(text).map_err(|e| ScenarioError::Parse(format!("scenario: {e}")))?;
+        let de = toml::Deserializer::parse(text)
+            .map_err(|e| ScenarioError::Parse(format!("scenario: {e}")))?;
         serde_path_to_error::deserialize(de).map_err(|e| {
             let path = e.path().to_string();
             let inner = e.into_inner();
@@ -73,6 +78,7 @@ impl Scenario {
 
     /// The scenario as TOML text.
     pub fn to_toml(&self) -> String {
-        toml::to_string_pretty(self).unwrap_or_else(|e| format!("# cannot serialise scenario: {e}\n"))
+        toml::to_string_pretty(self)
+            .unwrap_or_else(|e| format!("# cannot serialise scenario: {e}\n"))
     }
 }

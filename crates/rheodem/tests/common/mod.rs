@@ -2,11 +2,11 @@
 #![allow(dead_code)]
 
 use glam::DVec3;
+use rheodem::Simulation;
 use rheodem::contact::{ContactLaw, ContactTable, Damping, NormalLaw, Resistance};
 use rheodem::domain::Domain;
 use rheodem::particles::{Motion, Particles, Sphere};
 use rheodem::walls::PlaneWall;
-use rheodem::Simulation;
 
 /// Density used by the tests (kg/m³).
 pub const RHO: f64 = 2000.0;
@@ -81,8 +81,17 @@ pub fn simulation(
         .map(|(point, normal)| PlaneWall::new(point, normal, 0, p.len()))
         .collect();
     let max_r = spheres.iter().map(|s| s.radius).fold(0.0, f64::max);
-    Simulation::new(p, domain, ContactTable::uniform(1, law), walls, gravity, dt, 0.2 * max_r, 0.0)
-        .expect("valid test set-up")
+    Simulation::new(
+        p,
+        domain,
+        ContactTable::uniform(1, law),
+        walls,
+        gravity,
+        dt,
+        0.2 * max_r,
+        0.0,
+    )
+    .expect("valid test set-up")
 }
 
 /// Slot of the particle with permanent id `id`.
@@ -170,7 +179,8 @@ pub fn fcc_packing(
                 for b in &basis {
                     let cell = DVec3::new(i as f64, j as f64, k as f64);
                     let position = (cell + *b + DVec3::splat(0.25)) * s;
-                    let mut sph = sphere(position, random_vec(&mut rng, v_amp), radii[spheres.len()]);
+                    let mut sph =
+                        sphere(position, random_vec(&mut rng, v_amp), radii[spheres.len()]);
                     sph.angular_velocity = if spin > 0.0 {
                         random_vec(&mut rng, w_amp)
                     } else {
