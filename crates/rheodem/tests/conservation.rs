@@ -2,11 +2,17 @@
 //!
 //! * **Energy.** Without damping and friction the only force is the linear spring
 //!   `f = k_n δ n`, derived from the potential `½ k_n δ²` (continuous, with a continuous force,
-//!   at `δ = 0`). Velocity Verlet is symplectic: the total energy `Σ ½ m v² + Σ ½ I ω² +
-//!   Σ ½ k_n δ²` then fluctuates by `O((ω dt)²)` around a constant and does not drift. The
-//!   test fits a straight line through the energy sampled every 100 steps of a dense periodic
-//!   packing over 10⁵ steps at `dt = t_c/100` and requires `|slope| × run length` below
-//!   10⁻⁴ of the mean energy.
+//!   at `δ = 0`). Velocity Verlet is symplectic: while the set of touching pairs does not
+//!   change, the total energy `Σ ½ m v² + Σ ½ I ω² + Σ ½ k_n δ²` fluctuates by `O((ω dt)²)`
+//!   around a constant and does not drift. Each contact that opens or closes is a kink of the
+//!   force, where the scheme makes a small energy error of random sign (zero mean; standard
+//!   deviation 10⁻⁵ of the pair energy per binary collision at `t_c/100`), so a packing whose
+//!   contacts keep changing shows a slow random walk of its energy that vanishes as `dt → 0`.
+//!   The tests fit a straight line through the energy sampled every 100 steps over 10⁵ steps
+//!   at `dt = t_c/100` and require `|slope| × run length` below 10⁻⁴ of the mean energy for a
+//!   compressed packing with a persistent contact network, and below 5·10⁻⁴ (with a
+//!   convergence check in `dt`) for a hot dense packing where contacts form and break all the
+//!   time.
 //! * **Linear momentum.** Every pair force is applied as `+f` on `i` and `−f` on `j`
 //!   (normal, tangential, damping alike), periodic images carry no velocity shift, and there
 //!   is no wall and no gravity: `Σ m v` is constant up to floating-point rounding, with
@@ -58,55 +64,118 @@ fn full_law(e: f64, mu: f64, mu_ro: f64) -> ContactLaw {
     law
 }
 
-/// Total energy of an undamped, frictionless dense packing: no drift over 10⁵ steps.
-///
-/// 256 spheres (`w = 1.2`) on a jittered-radius FCC lattice at `φ = 0.6`, where the larger
-/// neighbours start out overlapping, with random velocities (σ = 0.1 m/s per component): a
-/// hot dense fluid with a contact on every particle most of the time. `dt = t_c/100` of the
-/// lightest pair, 10⁵ steps ≈ 10³ `t_c`.
-#[test]
-fn energy_is_conserved_without_damping_and_friction() {
+/// Runs an undamped, frictionless packing for `steps` steps at `dt = t_c / per_contact` (of
+/// the lightest pair), sampling the total energy every `every` steps with a measuring step.
+/// Returns `(relative drift, relative RMS fluctuation, mean Z)`: the drift is the slope of the
+/// least-squares line through the samples times the sampled time span, over the mean energy.
+#[allow(clippy::too_many_arguments)]
+fn energy_run(
+    cells: usize,
+    phi: f64,
+    w: f64,
+    v_rms: f64,
+    seed: u64,
+    per_contact: f64,
+    steps: u64,
+    every: u64,
+    label: &str,
+) -> (f64, f64, f64) {
     let law = normal_law(1.0);
-    let (spheres, domain) = fcc_packing(4, 0.6, 1.2, 0.1, 0.0, 11);
-    let dt = shortest_pair_contact_time(&spheres, &law) / 100.0;
+    let (spheres, domain) = fcc_packing(cells, phi, w, v_rms, 0.0, seed);
+    let dt = shortest_pair_contact_time(&spheres, &law) / per_contact;
     let mut sim = simulation(&spheres, law, domain, vec![], DVec3::ZERO, dt);
-    let steps = 100_000u64;
-    let every = 100u64;
+    // A single-threaded pool: the run (and so the realisation of the integration error) is
+    // the same on every machine.
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .expect("thread pool");
     let clock = Instant::now();
-    let (mut t, mut energy, mut z) = (Vec::new(), Vec::new(), 0.0);
-    for k in 1..=steps {
-        let measure = k % every == 0;
-        sim.step(measure).expect("step");
-        if measure {
-            let obs = sim.observables();
-            t.push(sim.time);
-            energy.push(obs.total_energy());
-            z += obs.coordination;
+    let (t, energy, z) = pool.install(|| {
+        let (mut t, mut energy, mut z) = (Vec::new(), Vec::new(), 0.0);
+        for k in 1..=steps {
+            let measure = k % every == 0;
+            sim.step(measure).expect("step");
+            if measure {
+                let obs = sim.observables();
+                t.push(sim.time);
+                energy.push(obs.total_energy());
+                z += obs.coordination;
+            }
         }
-    }
+        (t, energy, z)
+    });
     let elapsed = clock.elapsed();
     let n = energy.len() as f64;
     let mean = energy.iter().sum::<f64>() / n;
     let (_, slope) = linear_fit(&t, &energy);
-    let run = t[t.len() - 1] - t[0];
-    let drift = slope * run / mean;
+    let drift = slope * (t[t.len() - 1] - t[0]) / mean;
     let rms = (energy.iter().map(|e| (e - mean).powi(2)).sum::<f64>() / n).sqrt() / mean;
-    let (e0, e1) = (energy[0], energy[energy.len() - 1]);
     eprintln!(
-        "energy: {} particles, {steps} steps at t_c/100 in {:.1} s, {} rebuilds, mean Z = {:.2}; \
-         relative drift (fit slope × run / mean) = {drift:.3e}, relative RMS fluctuation = {rms:.3e}, \
-         first→last sample {:.3e}",
+        "energy [{label}]: {} particles, φ = {phi}, w = {w}, {steps} steps at t_c/{per_contact} \
+         ({:.0} t_c) in {:.1} s, {} rebuilds, mean Z = {:.2}: relative drift = {drift:.3e}, \
+         relative RMS fluctuation = {rms:.3e}",
         sim.particles.len(),
+        steps as f64 / per_contact,
         elapsed.as_secs_f64(),
         sim.neighbors.builds,
         z / n,
-        (e1 - e0) / mean
     );
-    assert!(z / n > 1.0, "not dense: mean coordination {:.2}", z / n);
-    assert!(sim.neighbors.builds > 10, "the packing hardly moved");
+    (drift, rms, z / n)
+}
+
+/// Total energy of an undamped, frictionless, compressed periodic packing: no drift over 10⁵
+/// steps at `t_c/100`.
+///
+/// 256 spheres (`w = 1.05`) on an FCC lattice at nominal `φ = 0.78` (soft spheres: every
+/// lattice neighbour overlaps by up to ~5 %), with random velocities (σ = 0.05 m/s per
+/// component): an elastic solid with `Z ≈ 11.4`, whose contacts are mostly persistent but
+/// open and close now and then. 10⁵ steps ≈ 10³ `t_c`, energy sampled every 100 steps.
+/// Measured over six seeds: |drift| ≤ 1.8·10⁻⁵, RMS 2–6·10⁻⁶. Criterion: 10⁻⁴.
+#[test]
+fn energy_is_conserved_in_compressed_packing() {
+    let (drift, _, z) = energy_run(4, 0.78, 1.05, 0.05, 11, 100.0, 100_000, 100, "compressed");
+    assert!(z > 10.0, "not a dense contact network: Z = {z:.2}");
     assert!(
         drift.abs() < 1e-4,
         "energy drift {drift:.3e} of the mean energy"
+    );
+}
+
+/// Total energy of an undamped, frictionless, hot dense packing where contacts form and break
+/// all the time.
+///
+/// 256 spheres (`w = 1.2`) at `φ = 0.6`, random velocities σ = 0.1 m/s: `Z ≈ 1.5`, about 2·10⁵
+/// contact events in 10³ `t_c`. Each event is a kink of the force (`k_n δ` starts and stops),
+/// where Verlet makes an `O(dt²)` energy error of random sign (binary collisions at `t_c/100`:
+/// standard deviation 10⁻⁵ of the pair energy, mean zero). The total energy therefore
+/// performs a random walk: measured relative "drift" over 10³ `t_c` at `t_c/100` is
+/// ±(0.1–1.5)·10⁻⁴ depending on the realisation (7 seeds), falling as `dt²–dt³` (≈3·10⁻⁶ at
+/// `t_c/400`), independent of the Verlet skin (50 to 1600 rebuilds) and decreasing as
+/// `1/√N` with system size (108 → 864 spheres): integration error, not a missed contact.
+/// At `t_c/100` the test bounds the drift by 5·10⁻⁴ (~5σ) and checks the convergence: over
+/// 250 `t_c`, the RMS fluctuation at `t_c/400` must be below 1/8 of that at `t_c/100` (second
+/// order would give 1/16).
+#[test]
+fn energy_is_conserved_with_contacts_forming_and_breaking() {
+    let (drift, rms_100, z) = energy_run(4, 0.6, 1.2, 0.1, 11, 100.0, 100_000, 100, "hot, t_c/100");
+    assert!(z > 1.0, "not dense: Z = {z:.2}");
+    assert!(
+        drift.abs() < 5e-4,
+        "energy drift {drift:.3e} of the mean energy"
+    );
+    let (_, rms_100_short, _) =
+        energy_run(4, 0.6, 1.2, 0.1, 12, 100.0, 25_000, 100, "hot, t_c/100");
+    let (_, rms_400_short, _) =
+        energy_run(4, 0.6, 1.2, 0.1, 12, 400.0, 100_000, 400, "hot, t_c/400");
+    eprintln!(
+        "energy: RMS fluctuation over 250 t_c: {rms_100_short:.3e} at t_c/100, {rms_400_short:.3e} at t_c/400 \
+         (ratio {:.1}); over 1000 t_c at t_c/100: {rms_100:.3e}",
+        rms_100_short / rms_400_short
+    );
+    assert!(
+        rms_400_short < rms_100_short / 8.0,
+        "energy error does not converge with dt"
     );
 }
 
@@ -161,9 +230,10 @@ fn linear_momentum_is_conserved_in_periodic_box() {
 /// A clump of touching spheres near the origin, imploding with random velocities and spins.
 fn clump(count: usize, seed: u64) -> Vec<Sphere> {
     let mut rng = rng(seed);
-    // FCC sites with nearest-neighbour distance 2 A_REF, nearest to the origin first.
+    // FCC sites with nearest-neighbour distance 2.06 A_REF (the largest diameter), nearest to
+    // the origin first.
     let mut sites = Vec::new();
-    let s = 2.0 * A_REF * 2f64.sqrt();
+    let s = 2.06 * A_REF * 2f64.sqrt();
     let basis = [
         DVec3::new(0.0, 0.0, 0.0),
         DVec3::new(0.5, 0.5, 0.0),
@@ -189,11 +259,11 @@ fn clump(count: usize, seed: u64) -> Vec<Sphere> {
     sites
         .into_iter()
         .map(|r| {
-            // Radii within ±3 % of A_REF: every lattice neighbour touches or nearly does.
+            // Radii within ±3 % of A_REF: lattice neighbours start at most 6 % of a apart.
             let a = A_REF * rng.random_range(0.97..1.03);
             // Inward at up to 0.05 m/s, plus random parts, so that the clump collides with
             // itself for hundreds of steps.
-            let v = -0.05 * r / r_max + random_vec(&mut rng, 0.03);
+            let v = -0.05 * r / r_max + random_vec(&mut rng, 0.01);
             let mut sph = sphere(r, v, a);
             sph.angular_velocity = random_vec(&mut rng, 0.05 / A_REF);
             sph
@@ -205,7 +275,8 @@ fn clump(count: usize, seed: u64) -> Vec<Sphere> {
 /// rounding with friction, damping, rolling and torsion resistance on.
 ///
 /// 40 spheres, `e = 0.5`, `μ = 0.5`, `μ_r = μ_o = 0.05`, open box, no walls, no gravity,
-/// 1000 steps at `t_c/50`. Tolerance 10⁻¹² of `Σ |r × m v| + |I ω|`.
+/// 400 steps at `t_c/50`. Tolerance 10⁻¹² of `Σ |r × m v| + |I ω|` (rounding of the pair
+/// torques is ~10⁻¹⁶ of each term per step).
 #[test]
 fn angular_momentum_is_conserved_for_isolated_clump() {
     let law = full_law(0.5, 0.5, 0.05);
@@ -224,7 +295,10 @@ fn angular_momentum_is_conserved_for_isolated_clump() {
         .map(|i| p.angular_velocity[i] / p.inv_inertia[i])
         .sum();
     let (mut worst, mut contacts, mut sliding) = (0.0f64, 0u64, 0.0f64);
-    let steps = 1000;
+    // Largest rolling and torsion spring seen (m): the resistances must have acted.
+    let (mut rolling, mut torsion) = (0.0f64, 0.0f64);
+    // The clump closes its gaps in ~80 steps, collides for ~300 and then disperses.
+    let steps = 400;
     for _ in 0..steps {
         sim.step(true).expect("step");
         let dl = (angular_momentum(&sim.particles) - l0).length() / scale;
@@ -232,6 +306,11 @@ fn angular_momentum_is_conserved_for_isolated_clump() {
         let obs = sim.observables();
         contacts += obs.contacts;
         sliding += obs.sliding_fraction * obs.contacts as f64;
+        let pairs = sim.neighbors.slices();
+        for h in pairs.history.iter() {
+            rolling = rolling.max(h.rolling.length());
+            torsion = torsion.max(h.torsion.length());
+        }
     }
     let p = &sim.particles;
     let spin1: DVec3 = (0..p.len())
@@ -239,15 +318,20 @@ fn angular_momentum_is_conserved_for_isolated_clump() {
         .sum();
     eprintln!(
         "angular momentum: {} particles, {steps} steps, {:.1} contacts/step ({:.0} sliding), \
-         |L0|/scale = {:.3e}, spin part moved by {:.3e} of scale, max |ΔL|/scale = {worst:.3e}",
+         largest rolling/torsion spring {rolling:.2e}/{torsion:.2e} m, |L0|/scale = {:.3e}, \
+         spin part moved by {:.3e} of scale, max |ΔL|/scale = {worst:.3e}",
         p.len(),
         contacts as f64 / steps as f64,
         sliding,
         l0.length() / scale,
         (spin1 - spin0).length() / scale,
     );
-    assert!(contacts > steps * 20, "too few contacts: {contacts}");
+    assert!(contacts > steps * 10, "too few contacts: {contacts}");
     assert!(sliding > 0.0, "no contact ever slid");
+    assert!(
+        rolling > 0.0 && torsion > 0.0,
+        "rolling or torsion resistance never acted"
+    );
     // The exchange between orbital and spin parts must be real for the test to mean something.
     assert!(
         (spin1 - spin0).length() > 1e-3 * scale,
@@ -342,78 +426,4 @@ fn clone_continues_bit_identically() {
         fingerprint(&sim) == fingerprint(&copy),
         "the clone diverged"
     );
-}
-
-#[test]
-#[ignore]
-fn explore_energy() {
-    let frac: f64 = std::env::var("FRAC").map(|s| s.parse().unwrap()).unwrap_or(100.0);
-    let skin_f: f64 = std::env::var("SKIN").map(|s| s.parse().unwrap()).unwrap_or(0.2);
-    let tc_n: f64 = std::env::var("TCS").map(|s| s.parse().unwrap()).unwrap_or(1000.0);
-    let seed: u64 = std::env::var("SEED").map(|s| s.parse().unwrap()).unwrap_or(11);
-    let v: f64 = std::env::var("VRMS").map(|s| s.parse().unwrap()).unwrap_or(0.1);
-    let phi: f64 = std::env::var("PHI").map(|s| s.parse().unwrap()).unwrap_or(0.6);
-    let law = normal_law(1.0);
-    let cells: usize = std::env::var("CELLS").map(|s| s.parse().unwrap()).unwrap_or(4);
-    let (spheres, domain) = fcc_packing(cells, phi, 1.2, v, 0.0, seed);
-    let dt = shortest_pair_contact_time(&spheres, &law) / frac;
-    let mut zsum = 0.0;
-    let mut p = rheodem::particles::Particles::default();
-    for s in &spheres { p.push(*s, RHO); }
-    let mut sim = Simulation::new(p, domain, rheodem::contact::ContactTable::uniform(1, law), vec![], DVec3::ZERO, dt, skin_f * A_REF * 1.1, 0.0).unwrap();
-    let warm: u64 = std::env::var("WARM").map(|s| s.parse().unwrap()).unwrap_or(0);
-    for _ in 0..warm { sim.step(false).unwrap(); }
-    let steps = (tc_n * frac) as u64;
-    let every = (frac as u64).max(1);
-    let (mut t, mut energy) = (Vec::new(), Vec::new());
-    for k in 1..=steps {
-        let measure = k % every == 0;
-        sim.step(measure).expect("step");
-        if measure { let obs = sim.observables(); zsum += obs.coordination; t.push(sim.time); energy.push(obs.total_energy()); }
-    }
-    let n = energy.len() as f64;
-    let mean = energy.iter().sum::<f64>() / n;
-    let (_, slope) = linear_fit(&t, &energy);
-    let run = t[t.len() - 1] - t[0];
-    let rms = (energy.iter().map(|e| (e - mean).powi(2)).sum::<f64>() / n).sqrt() / mean;
-    if let Ok(path) = std::env::var("DUMP") { let mut out = String::new(); for (a,b) in t.iter().zip(&energy) { out += &format!("{a} {b}\n"); } std::fs::write(path, out).unwrap(); }
-    eprintln!("Z {:.2} N {} ", zsum / n, sim.particles.len());
-    eprintln!("frac {frac} skin {skin_f} seed {seed} v {v}: drift {:.3e} rms {:.3e} builds {} first->last {:.3e}", slope*run/mean, rms, sim.neighbors.builds, (energy[energy.len()-1]-energy[0])/mean);
-}
-
-#[test]
-#[ignore]
-fn explore_binary() {
-    let frac: f64 = std::env::var("FRAC").map(|s| s.parse().unwrap()).unwrap_or(100.0);
-    let count: usize = std::env::var("COUNT").map(|s| s.parse().unwrap()).unwrap_or(2000);
-    let law = normal_law(1.0);
-    let mut rng = rng(5);
-    let (mut sum, mut sum2) = (0.0, 0.0);
-    for _ in 0..count {
-        let a0 = A_REF * rng.random_range(1.0..1.2);
-        let a1 = A_REF * rng.random_range(1.0..1.2);
-        let m_ij = mass(a0) * mass(a1) / (mass(a0) + mass(a1));
-        let tc = law.normal.contact_time(m_ij).unwrap();
-        let dt = tc / frac;
-        let v0 = 0.02;
-        let b: f64 = 0.999 * rng.random_range(0.0f64..1.0).sqrt() * (a0 + a1);
-        let phase: f64 = rng.random_range(0.0..1.0);
-        let x = ((a0 + a1).powi(2) - b * b).sqrt() + v0 * dt * phase;
-        let s0 = sphere(DVec3::new(x, b, 0.0), DVec3::new(-v0, 0.0, 0.0), a0);
-        let s1 = sphere(DVec3::ZERO, DVec3::ZERO, a1);
-        let mut sim = simulation(&[s0, s1], law, open_box(0.01), vec![], DVec3::ZERO, dt);
-        let e0 = sim.observables().total_energy();
-        let mut touched = false;
-        for _ in 0..(10.0 * frac) as usize {
-            sim.step(true).unwrap();
-            let o = sim.observables();
-            if o.contacts > 0 { touched = true; } else if touched { break; }
-        }
-        let e1 = sim.observables().total_energy();
-        let r = e1 / e0 - 1.0;
-        sum += r; sum2 += r * r;
-    }
-    let n = count as f64;
-    let mean = sum / n; let sd = (sum2 / n - mean * mean).sqrt();
-    eprintln!("binary frac {frac}: mean {mean:.3e} +- {:.1e} sd {sd:.2e}", sd / n.sqrt());
 }
