@@ -6,7 +6,7 @@
 //! decaying shear keep contacts forming and breaking.
 
 use crate::Simulation;
-use crate::contact::{ContactLaw, ContactTable, Damping, NormalLaw, Resistance};
+use crate::contact::{Adhesion, ContactLaw, ContactTable, Damping, NormalLaw, Resistance};
 use crate::domain::Domain;
 use crate::io::packing::parse_packing;
 use crate::particles::{Motion, Particles, Sphere};
@@ -39,6 +39,7 @@ pub fn bench_law() -> ContactLaw {
         },
         rolling: Resistance::NONE,
         torsion: Resistance::NONE,
+        adhesion: Adhesion::None,
     }
 }
 
@@ -76,7 +77,6 @@ pub fn standard_problem(shear_rate: f64) -> Simulation {
         DVec3::ZERO,
         3.2e-4,
         0.2,
-        0.0,
     )
     .expect("the standard problem's box is large enough")
 }

@@ -11,7 +11,7 @@
 
 use crate::contact::{ContactHistory, ContactTable, PairKinematics};
 use crate::domain::{IDENTITY_IMAGE, IMAGE_COUNT, ImageTransform};
-use crate::measure::{ContactSums, outer};
+use crate::measure::ContactSums;
 use crate::neighbor::NeighborList;
 use crate::particles::Particles;
 use glam::DVec3;
@@ -37,6 +37,7 @@ struct Inputs<'a> {
     image: &'a [u8],
     images: &'a [ImageTransform; IMAGE_COUNT],
     laws: &'a ContactTable,
+    max_range: f64,
     dt: f64,
 }
 
@@ -66,6 +67,7 @@ pub fn pair_forces<const MEASURE: bool>(
         image: slices.image,
         images,
         laws,
+        max_range: laws.max_range(),
         dt,
     };
 
@@ -80,15 +82,15 @@ pub fn pair_forces<const MEASURE: bool>(
 
     // Carve the history into one disjoint slice per chunk.
     let mut jobs = Vec::with_capacity(chunks);
-    let (mut touching, mut history) = (slices.touching, slices.history);
+    let (mut active, mut history) = (slices.active, slices.history);
     let mut force_bufs = std::iter::once(&mut particles.force).chain(scratch.force.iter_mut());
     let mut torque_bufs = std::iter::once(&mut particles.torque).chain(scratch.torque.iter_mut());
     for c in 0..chunks {
         let (lo, hi) = (bounds[c], bounds[c + 1]);
         let pairs = (inputs.offsets[hi] - inputs.offsets[lo]) as usize;
-        let (t_here, t_rest) = std::mem::take(&mut touching).split_at_mut(pairs);
+        let (t_here, t_rest) = std::mem::take(&mut active).split_at_mut(pairs);
         let (h_here, h_rest) = std::mem::take(&mut history).split_at_mut(pairs);
-        touching = t_rest;
+        active = t_rest;
         history = h_rest;
         let (Some(f), Some(t)) = (force_bufs.next(), torque_bufs.next()) else {
             unreachable!("one buffer per chunk");
@@ -98,8 +100,8 @@ pub fn pair_forces<const MEASURE: bool>(
 
     let partial: Vec<ContactSums> = jobs
         .into_par_iter()
-        .map(|(range, touching, history, force, torque)| {
-            chunk_forces::<MEASURE>(&inputs, range, touching, history, force, torque)
+        .map(|(range, active, history, force, torque)| {
+            chunk_forces::<MEASURE>(&inputs, range, active, history, force, torque)
         })
         .collect();
 
@@ -132,7 +134,7 @@ pub fn pair_forces<const MEASURE: bool>(
 fn chunk_forces<const MEASURE: bool>(
     inp: &Inputs<'_>,
     range: std::ops::Range<usize>,
-    touching: &mut [bool],
+    active: &mut [bool],
     history: &mut [ContactHistory],
     force: &mut [DVec3],
     torque: &mut [DVec3],
@@ -157,22 +159,19 @@ fn chunk_forces<const MEASURE: bool>(
             let d2 = branch.length_squared();
             let sum = a_i + inp.radius[j];
             let local = k - base;
-            if d2 >= sum * sum {
-                if touching[local] {
-                    touching[local] = false;
+            let reach = sum + inp.max_range;
+            if d2 >= reach * reach {
+                if active[local] {
+                    active[local] = false;
                     history[local] = ContactHistory::default();
                 }
                 continue;
             }
-            touching[local] = true;
             let dist = d2.sqrt();
             let (v_j, w_j) = if code == IDENTITY_IMAGE {
                 (inp.velocity[j], inp.omega[j])
             } else {
-                (
-                    image.velocity(inp.velocity[j]),
-                    image.angular_velocity(inp.omega[j]),
-                )
+                (image.velocity(inp.velocity[j]), image.angular_velocity(inp.omega[j]))
             };
             let kin = PairKinematics {
                 normal: branch / dist,
@@ -186,16 +185,17 @@ fn chunk_forces<const MEASURE: bool>(
             };
             let law = inp.laws.get(inp.species[i], inp.species[j]);
             let h = &mut history[local];
-            let pf = law.evaluate(&kin, h, inp.dt);
+            let Some(pf) = law.interact(&kin, h, inp.dt) else {
+                active[local] = false;
+                continue;
+            };
+            active[local] = true;
             f_i += pf.force;
             t_i += pf.torque_i;
             force[j] -= pf.force;
             torque[j] += pf.torque_j;
             if MEASURE {
-                obs.stress_sum += outer(pf.force, branch);
-                obs.elastic_energy += law.elastic_energy(kin.overlap, h);
-                obs.contacts += 1;
-                obs.sliding += u64::from(pf.sliding);
+                obs.add_pair(&pf, &kin, law.elastic_energy(kin.overlap, a_i, kin.radius_j, h), branch);
             }
         }
         force[i] += f_i;

@@ -1,6 +1,7 @@
 //! Observables of the particle system (PHYSICS §5): energies, stress tensor, coordination,
 //! volume fraction, momenta.
 
+use crate::contact::{PairForce, PairKinematics};
 use crate::particles::Particles;
 use glam::{DMat3, DVec3};
 use serde::{Deserialize, Serialize};
@@ -25,6 +26,8 @@ pub struct ContactSums {
     pub contacts: u64,
     /// Contacts whose sliding spring slipped.
     pub sliding: u64,
+    /// Pairs apart (`δ ≤ 0`) that still attract (open bridges, or a reversible law's range).
+    pub attracting_apart: u64,
 }
 
 impl Default for ContactSums {
@@ -35,6 +38,7 @@ impl Default for ContactSums {
             elastic_energy: 0.0,
             contacts: 0,
             sliding: 0,
+            attracting_apart: 0,
         }
     }
 }
@@ -46,6 +50,21 @@ impl ContactSums {
         self.elastic_energy += o.elastic_energy;
         self.contacts += o.contacts;
         self.sliding += o.sliding;
+        self.attracting_apart += o.attracting_apart;
+    }
+
+    /// Adds one interacting pair: force `pf` on `i`, kinematics `k`, stored energy
+    /// `energy` (J) and branch vector `branch = r_i − r_j` (m).
+    #[inline]
+    pub fn add_pair(&mut self, pf: &PairForce, k: &PairKinematics, energy: f64, branch: DVec3) {
+        self.stress_sum += outer(pf.force, branch);
+        self.elastic_energy += energy;
+        if k.overlap > 0.0 {
+            self.contacts += 1;
+            self.sliding += u64::from(pf.sliding);
+        } else {
+            self.attracting_apart += 1;
+        }
     }
 }
 
@@ -68,6 +87,9 @@ pub struct Observables {
     pub sliding_fraction: f64,
     /// Coordination number `Z = 2 N_c / N` over free particles.
     pub coordination: f64,
+    /// Pairs apart that still attract (open liquid bridges, reversible range), per free
+    /// particle.
+    pub bridges_per_particle: f64,
     /// Volume fraction of the free particles in the box.
     pub volume_fraction: f64,
     /// Stress tensor `σ = (Σ m v'⊗v' + Σ f⊗l) / V` (Pa), compression positive, row-major.

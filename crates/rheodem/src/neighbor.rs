@@ -45,7 +45,7 @@ pub struct NeighborList {
     offsets: Vec<u32>,
     partner: Vec<u32>,
     image: Vec<u8>,
-    touching: Vec<bool>,
+    active: Vec<bool>,
     history: Vec<ContactHistory>,
     reference_position: Vec<DVec3>,
     reference_shift: Vec<DVec3>,
@@ -61,8 +61,8 @@ pub struct PairSlices<'a> {
     pub partner: &'a [u32],
     /// Image code of `j` for each pair.
     pub image: &'a [u8],
-    /// Whether each pair carries live contact history.
-    pub touching: &'a mut [bool],
+    /// Whether each pair carries live history (in contact or attracting).
+    pub active: &'a mut [bool],
     /// Contact history of each pair.
     pub history: &'a mut [ContactHistory],
 }
@@ -93,7 +93,7 @@ impl NeighborList {
             offsets: &self.offsets,
             partner: &self.partner,
             image: &self.image,
-            touching: &mut self.touching,
+            active: &mut self.active,
             history: &mut self.history,
         }
     }
@@ -172,7 +172,7 @@ impl NeighborList {
 
         self.find_pairs(particles, &grid, &start);
 
-        self.touching = vec![false; self.partner.len()];
+        self.active = vec![false; self.partner.len()];
         self.history = vec![ContactHistory::default(); self.partner.len()];
         if !old.is_empty() {
             for i in 0..particles.len() {
@@ -185,7 +185,7 @@ impl NeighborList {
                         old.get(&(id_j, id_i)).map(ContactHistory::flipped)
                     };
                     if let Some(h) = found {
-                        self.touching[k] = true;
+                        self.active[k] = true;
                         self.history[k] = h;
                     }
                 }
@@ -207,7 +207,7 @@ impl NeighborList {
         for i in 0..particles.len() {
             let id_i = particles.id[i];
             for k in self.offsets[i] as usize..self.offsets[i + 1] as usize {
-                if !self.touching[k] {
+                if !self.active[k] {
                     continue;
                 }
                 let id_j = particles.id[self.partner[k] as usize];

@@ -44,7 +44,7 @@ pub struct Simulation {
 
 impl Simulation {
     /// Assembles a simulation and evaluates the initial forces. `skin` (m) is the Verlet
-    /// skin and `range` (m) the interaction range of the contact laws beyond contact.
+    /// skin; the list also keeps every pair within the laws' interaction range.
     #[allow(clippy::too_many_arguments)]
     pub fn new(
         particles: Particles,
@@ -54,8 +54,8 @@ impl Simulation {
         gravity: DVec3,
         dt: f64,
         skin: f64,
-        range: f64,
     ) -> Result<Simulation, NeighborError> {
+        let range = laws.max_range();
         let mut sim = Simulation {
             particles,
             domain,
@@ -167,6 +167,7 @@ impl Simulation {
                 0.0
             },
             coordination: 2.0 * sums.contacts as f64 / free,
+            bridges_per_particle: sums.attracting_apart as f64 / free,
             volume_fraction: p.free_volume() / volume,
             stress: to_rows(stress),
         }

@@ -1,7 +1,7 @@
 //! Infinite planar walls: fixed, infinitely heavy, with the contact law of their species.
 
 use crate::contact::{ContactHistory, ContactTable, PairKinematics};
-use crate::measure::{ContactSums, outer};
+use crate::measure::ContactSums;
 use crate::particles::Particles;
 use glam::DVec3;
 use serde::{Deserialize, Serialize};
@@ -18,8 +18,8 @@ pub struct PlaneWall {
     pub species: u16,
     /// Contact history per particle id.
     history: Vec<ContactHistory>,
-    /// Whether each particle id is in contact.
-    touching: Vec<bool>,
+    /// Whether each particle id interacts with the wall.
+    active: Vec<bool>,
 }
 
 impl PlaneWall {
@@ -30,7 +30,7 @@ impl PlaneWall {
             normal: normal.normalize(),
             species,
             history: vec![ContactHistory::default(); particle_count],
-            touching: vec![false; particle_count],
+            active: vec![false; particle_count],
         }
     }
 
@@ -51,15 +51,14 @@ impl PlaneWall {
             let a = particles.radius[i];
             let gap = (particles.position[i] - self.point).dot(self.normal);
             let overlap = a - gap;
-            if overlap <= 0.0 {
-                if self.touching[id] {
-                    self.touching[id] = false;
+            let law = laws.get(particles.species[i], self.species);
+            if overlap <= -law.range() {
+                if self.active[id] {
+                    self.active[id] = false;
                     self.history[id] = ContactHistory::default();
                 }
                 continue;
             }
-            self.touching[id] = true;
-            let law = laws.get(particles.species[i], self.species);
             let k = PairKinematics {
                 normal: self.normal,
                 overlap,
@@ -71,13 +70,15 @@ impl PlaneWall {
                 reduced_mass: particles.mass[i],
             };
             let h = &mut self.history[id];
-            let f = law.evaluate(&k, h, dt);
+            let Some(f) = law.interact(&k, h, dt) else {
+                self.active[id] = false;
+                continue;
+            };
+            self.active[id] = true;
             particles.force[i] += f.force;
             particles.torque[i] += f.torque_i;
-            obs.stress_sum += outer(f.force, self.normal * gap);
-            obs.elastic_energy += law.elastic_energy(overlap, h);
-            obs.contacts += 1;
-            obs.sliding += u64::from(f.sliding);
+            let energy = law.elastic_energy(overlap, a, f64::INFINITY, h);
+            obs.add_pair(&f, &k, energy, self.normal * gap);
         }
         obs
     }

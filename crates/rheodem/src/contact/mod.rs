@@ -1,18 +1,21 @@
 //! Contact laws between two spheres (PHYSICS §2).
 //!
-//! A [`ContactLaw`] combines independent parts: the linear visco-elastic [`NormalLaw`] and
-//! three spring–dashpot–Coulomb [`Resistance`]s (sliding, rolling, torsion). Per-contact
-//! state lives in one [`ContactHistory`] record. [`ContactLaw::evaluate`] is the single
-//! pair kernel used by the force loop for particle pairs and for planar walls alike.
+//! A [`ContactLaw`] combines independent parts: the linear visco-elastic [`NormalLaw`],
+//! three spring–dashpot–Coulomb [`Resistance`]s (sliding, rolling, torsion) and an
+//! [`Adhesion`] law. Per-contact state lives in one [`ContactHistory`] record.
+//! [`ContactLaw::interact`] is the single pair kernel used by the force loop for particle
+//! pairs and for planar walls alike.
 //! Sign convention: `n` points from the second particle `j` to the first `i`; the returned
 //! force acts on `i`, and `−force` on `j`.
 
+pub mod adhesion;
 pub mod friction;
 pub mod normal;
 
 use glam::DVec3;
 use serde::{Deserialize, Serialize};
 
+pub use adhesion::Adhesion;
 pub use friction::Resistance;
 pub use normal::{Damping, NormalLaw};
 
@@ -27,9 +30,13 @@ pub struct ContactLaw {
     pub rolling: Resistance,
     /// Torsion resistance (stiffness `k_o` in N/m, acting on the torsional displacement).
     pub torsion: Resistance,
+    /// Adhesive force added to the normal force.
+    pub adhesion: Adhesion,
 }
 
-/// Per-contact history: the three springs (m). Reset to zero when the contact opens.
+/// Per-contact history: the three springs (m), reset to zero when the contact opens, and
+/// the liquid bridge of irreversible adhesive laws, which outlives the contact until it
+/// ruptures.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct ContactHistory {
     /// Tangential (sliding) spring `ξ_t`.
@@ -38,6 +45,8 @@ pub struct ContactHistory {
     pub rolling: DVec3,
     /// Torsion spring `ξ_o` (along the normal).
     pub torsion: DVec3,
+    /// Whether an irreversible law's bridge exists.
+    pub bridge: bool,
 }
 
 impl ContactHistory {
@@ -49,6 +58,7 @@ impl ContactHistory {
             tangential: -self.tangential,
             rolling: self.rolling,
             torsion: -self.torsion,
+            bridge: self.bridge,
         }
     }
 }
@@ -83,15 +93,46 @@ pub struct PairForce {
     pub torque_i: DVec3,
     /// Torque on `j` (N m).
     pub torque_j: DVec3,
-    /// Repulsive normal force `k_n δ + γ_n δ̇` (N), the reference of the Coulomb limits.
+    /// Repulsive normal force `k_n δ + γ_n δ̇` (N), the reference of the Coulomb limits;
+    /// zero for a pair apart.
     pub repulsive: f64,
+    /// Adhesive normal force (N, ≤ 0).
+    pub adhesive: f64,
     /// Whether the sliding spring slipped this step.
     pub sliding: bool,
 }
 
 impl ContactLaw {
+    /// Interaction range beyond contact (m): where the adhesive law still pulls.
+    pub fn range(&self) -> f64 {
+        self.adhesion.range()
+    }
+
+    /// Evaluates a pair at any overlap and advances its history over `dt` (s). Returns
+    /// `None` when the pair does not interact; its history is then reset (an irreversible
+    /// bridge past its rupture distance is gone).
+    #[inline]
+    pub fn interact(&self, k: &PairKinematics, h: &mut ContactHistory, dt: f64) -> Option<PairForce> {
+        if k.overlap > 0.0 {
+            return Some(self.evaluate(k, h, dt));
+        }
+        // Apart: the springs relax; only the adhesive law (and its bridge) may act.
+        let bridge = h.bridge;
+        *h = ContactHistory::default();
+        if self.adhesion.is_none() {
+            return None;
+        }
+        let (f_a, alive) = self.adhesion.separated_force(-k.overlap, k.radius_i, k.radius_j, bridge);
+        h.bridge = alive;
+        (f_a != 0.0).then(|| PairForce {
+            force: k.normal * f_a,
+            adhesive: f_a,
+            ..PairForce::default()
+        })
+    }
+
     /// Evaluates the contact of a touching pair (`overlap > 0`) and advances its history
-    /// over `dt` (s).
+    /// over `dt` (s). The Coulomb limits use the repulsive part `|k_n δ + γ_n δ̇|` alone.
     #[inline]
     pub fn evaluate(&self, k: &PairKinematics, h: &mut ContactHistory, dt: f64) -> PairForce {
         let n = k.normal;
@@ -109,9 +150,16 @@ impl ContactLaw {
         let f_rep = self.normal.force(k.overlap, overlap_rate, gamma_n);
         let limit_ref = f_rep.abs();
 
+        let f_a = if self.adhesion.is_none() {
+            0.0
+        } else {
+            h.bridge = self.adhesion.needs_bridge();
+            self.adhesion.contact_force(k.radius_i, k.radius_j)
+        };
         let mut out = PairForce {
-            force: n * f_rep,
+            force: n * (f_rep + f_a),
             repulsive: f_rep,
+            adhesive: f_a,
             ..PairForce::default()
         };
 
@@ -166,13 +214,19 @@ impl ContactLaw {
         out
     }
 
-    /// Elastic energy stored in a contact (J): `½ k_n δ² + ½ k_t |ξ_t|² + ½ k_r |ξ_r|²
-    /// + ½ k_o |ξ_o|²`.
-    pub fn elastic_energy(&self, overlap: f64, h: &ContactHistory) -> f64 {
-        0.5 * (self.normal.stiffness * overlap * overlap
-            + self.tangential.stiffness * h.tangential.length_squared()
-            + self.rolling.stiffness * h.rolling.length_squared()
-            + self.torsion.stiffness * h.torsion.length_squared())
+    /// Elastic energy stored in a pair (J): `½ k_n δ² + ½ k_t |ξ_t|² + ½ k_r |ξ_r|²
+    /// + ½ k_o |ξ_o|²` in contact, plus the adhesive potential of the law (negative; zero
+    /// once the pair is free) for radii `a_i`, `a_j` (m).
+    pub fn elastic_energy(&self, overlap: f64, a_i: f64, a_j: f64, h: &ContactHistory) -> f64 {
+        let springs = if overlap > 0.0 {
+            0.5 * (self.normal.stiffness * overlap * overlap
+                + self.tangential.stiffness * h.tangential.length_squared()
+                + self.rolling.stiffness * h.rolling.length_squared()
+                + self.torsion.stiffness * h.torsion.length_squared())
+        } else {
+            0.0
+        };
+        springs + self.adhesion.potential(overlap, a_i, a_j, h.bridge)
     }
 }
 
@@ -195,6 +249,11 @@ impl ContactTable {
     /// Number of species.
     pub fn species(&self) -> usize {
         self.species
+    }
+
+    /// Largest interaction range beyond contact over all pairs (m).
+    pub fn max_range(&self) -> f64 {
+        self.laws.iter().map(ContactLaw::range).fold(0.0, f64::max)
     }
 
     /// Sets the law of the pair `(a, b)` (and `(b, a)`).

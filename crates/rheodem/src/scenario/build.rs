@@ -4,7 +4,7 @@ use super::prepare::{PreparationReport, Target, prepare};
 use super::spec::*;
 use super::{ScenarioError, invalid};
 use crate::Simulation;
-use crate::contact::{ContactLaw, ContactTable, Damping, NormalLaw, Resistance};
+use crate::contact::{Adhesion, ContactLaw, ContactTable, Damping, NormalLaw, Resistance};
 use crate::domain::Domain;
 use crate::generate::{
     MAX_INSERTION_FRACTION, Obstacle, Rng, gaussian_vector, insert_random, polydisperse_radii,
@@ -269,11 +269,46 @@ fn resistance(
     })
 }
 
+fn adhesion(key: &str, spec: &Option<AdhesionSpec>) -> Result<Adhesion, ScenarioError> {
+    let linear = |max_force: f64, stiffness: Option<f64>, range: Option<f64>| -> Result<(f64, f64), ScenarioError> {
+        let f = positive(&format!("{key}.max_force"), max_force)?;
+        at_most_one(key, &[("stiffness", stiffness.is_some()), ("range", range.is_some())])?;
+        let k = match (stiffness, range) {
+            (Some(k), _) => positive(&format!("{key}.stiffness"), k)?,
+            (None, Some(r)) => f / positive(&format!("{key}.range"), r)?,
+            (None, None) => {
+                return Err(invalid(format!("{key}.stiffness"), "(missing)", "give `stiffness` (N/m) or `range` (m)"));
+            }
+        };
+        Ok((f, k))
+    };
+    Ok(match spec {
+        None => Adhesion::None,
+        Some(AdhesionSpec::Reversible { max_force, stiffness, range }) => {
+            let (max_force, stiffness) = linear(*max_force, *stiffness, *range)?;
+            Adhesion::Reversible { max_force, stiffness }
+        }
+        Some(AdhesionSpec::LinearIrreversible { max_force, stiffness, range }) => {
+            let (max_force, stiffness) = linear(*max_force, *stiffness, *range)?;
+            Adhesion::LinearIrreversible { max_force, stiffness }
+        }
+        Some(AdhesionSpec::LiquidBridge { surface_tension, contact_angle_deg, volume }) => {
+            let gamma = positive(&format!("{key}.surface_tension"), *surface_tension)?;
+            let theta = *contact_angle_deg;
+            if !(theta.is_finite() && (0.0..90.0).contains(&theta)) {
+                return Err(invalid(format!("{key}.contact_angle_deg"), theta, "must lie in [0, 90) degrees: a bridge with θ ≥ 90° does not attract"));
+            }
+            let v = positive(&format!("{key}.volume"), *volume)
+                .map_err(|_| invalid(format!("{key}.volume"), volume, "must be positive (m³): a bridge of no volume has no rupture distance; omit `adhesion` for dry contacts"))?;
+            Adhesion::LiquidBridge { surface_tension: gamma, contact_angle: theta.to_radians(), volume: v }
+        }
+    })
+}
+
 fn contact_table(s: &Scenario) -> Result<ContactTable, ScenarioError> {
     let ns = s.species.len();
-    let mut table: Option<ContactTable> = None;
-    let mut set = vec![false; ns * ns];
-    let mut laws = Vec::new();
+    let mut default = None;
+    let mut pairs = Vec::new();
     for (k, c) in s.contacts.iter().enumerate() {
         let key = format!("contact[{k}]");
         let normal = normal_law(&format!("{key}.normal"), &c.normal)?;
@@ -282,67 +317,40 @@ fn contact_table(s: &Scenario) -> Result<ContactTable, ScenarioError> {
             tangential: resistance(&format!("{key}.friction"), &c.friction, &normal)?,
             rolling: resistance(&format!("{key}.rolling"), &c.rolling, &normal)?,
             torsion: resistance(&format!("{key}.torsion"), &c.torsion, &normal)?,
+            adhesion: adhesion(&format!("{key}.adhesion"), &c.adhesion)?,
         };
-        laws.push((key, c.species.clone(), law));
-    }
-    for (key, pair, law) in &laws {
-        if pair.is_none() {
-            if table.is_some() {
-                return Err(invalid(
-                    format!("{key}.species"),
-                    "(missing)",
-                    "only one default [[contact]] (without `species`) is allowed",
-                ));
+        match &c.species {
+            None if default.is_some() => {
+                return Err(invalid(format!("{key}.species"), "(missing)", "only one default [[contact]] (without `species`) is allowed"));
             }
-            table = Some(ContactTable::uniform(ns, *law));
-        }
-    }
-    let mut table = table.unwrap_or_else(|| {
-        ContactTable::uniform(
-            ns,
-            laws.first().map(|l| l.2).unwrap_or(ContactLaw {
-                normal: NormalLaw {
-                    stiffness: 1.0,
-                    damping: Damping::NONE,
-                },
-                tangential: Resistance::NONE,
-                rolling: Resistance::NONE,
-                torsion: Resistance::NONE,
-            }),
-        )
-    });
-    let default_given = laws.iter().any(|l| l.1.is_none());
-    for (key, pair, law) in &laws {
-        if let Some([a, b]) = pair {
-            let ia = species_index(&format!("{key}.species[0]"), a, &s.species)? as usize;
-            let ib = species_index(&format!("{key}.species[1]"), b, &s.species)? as usize;
-            if set[ia * ns + ib] {
-                return Err(invalid(
-                    format!("{key}.species"),
-                    format!("[\"{a}\", \"{b}\"]"),
-                    "this pair already has a contact law",
-                ));
-            }
-            set[ia * ns + ib] = true;
-            set[ib * ns + ia] = true;
-            table.set(ia, ib, *law);
-        }
-    }
-    if !default_given {
-        for a in 0..ns {
-            for b in a..ns {
-                if !set[a * ns + b] {
-                    return Err(invalid(
-                        "contact",
-                        format!(
-                            "no law for [\"{}\", \"{}\"]",
-                            s.species[a].name, s.species[b].name
-                        ),
-                        "give a default [[contact]] without `species`, or one for every species pair",
-                    ));
+            None => default = Some(law),
+            Some([a, b]) => {
+                let ia = species_index(&format!("{key}.species[0]"), a, &s.species)? as usize;
+                let ib = species_index(&format!("{key}.species[1]"), b, &s.species)? as usize;
+                if pairs.iter().any(|&(x, y, _)| (x, y) == (ia, ib) || (x, y) == (ib, ia)) {
+                    return Err(invalid(format!("{key}.species"), format!("[\"{a}\", \"{b}\"]"), "this pair already has a contact law"));
                 }
+                pairs.push((ia, ib, law));
             }
         }
+    }
+    let mut covered = vec![default.is_some(); ns * ns];
+    for &(a, b, _) in &pairs {
+        covered[a * ns + b] = true;
+        covered[b * ns + a] = true;
+    }
+    if let Some(missing) = covered.iter().position(|c| !c) {
+        let (a, b) = (missing / ns, missing % ns);
+        return Err(invalid(
+            "contact",
+            format!("no law for [\"{}\", \"{}\"]", s.species[a].name, s.species[b].name),
+            "give a default [[contact]] without `species`, or one for every species pair",
+        ));
+    }
+    let first = default.unwrap_or_else(|| pairs[0].2);
+    let mut table = ContactTable::uniform(ns, first);
+    for (a, b, law) in pairs {
+        table.set(a, b, law);
     }
     Ok(table)
 }
@@ -802,7 +810,7 @@ pub fn build(s: &Scenario, base_dir: &Path) -> Result<Built, ScenarioError> {
 
     let box_error = |e: NeighborError| invalid("domain.size", format!("{size:?}"), e.to_string());
     let mut simulation =
-        Simulation::new(particles, domain, laws, plane_walls, gravity, dt, skin, 0.0)
+        Simulation::new(particles, domain, laws, plane_walls, gravity, dt, skin)
             .map_err(box_error)?;
     let preparation = match target {
         None => None,

@@ -2,7 +2,7 @@
 //! frictionless contacts, then relaxation with the full contact laws.
 
 use crate::Simulation;
-use crate::contact::Resistance;
+use crate::contact::{Adhesion, Resistance};
 use crate::neighbor::NeighborError;
 use serde::{Deserialize, Serialize};
 
@@ -58,6 +58,7 @@ pub fn prepare(
         law.tangential = Resistance::NONE;
         law.rolling = Resistance::NONE;
         law.torsion = Resistance::NONE;
+        law.adhesion = Adhesion::None;
     });
     sim.laws = frictionless;
     let solid = sim.particles.free_volume();

@@ -3,7 +3,7 @@
 
 use glam::DVec3;
 use rheodem::Simulation;
-use rheodem::contact::{ContactLaw, ContactTable, Damping, NormalLaw, Resistance};
+use rheodem::contact::{Adhesion, ContactLaw, ContactTable, Damping, NormalLaw, Resistance};
 use rheodem::domain::Domain;
 use rheodem::particles::{Motion, Particles, Sphere};
 use rheodem::walls::PlaneWall;
@@ -39,6 +39,7 @@ pub fn normal_law(e: f64) -> ContactLaw {
         tangential: Resistance::NONE,
         rolling: Resistance::NONE,
         torsion: Resistance::NONE,
+        adhesion: Adhesion::None,
     }
 }
 
@@ -89,7 +90,6 @@ pub fn simulation(
         gravity,
         dt,
         0.2 * max_r,
-        0.0,
     )
     .expect("valid test set-up")
 }

@@ -1,0 +1,220 @@
+//! Adhesive (cohesive) normal forces, added to the repulsive normal force (PHYSICS §2.3–2.5).
+//!
+//! Forces are positive when repulsive, so every adhesive force here is ≤ 0. The separation
+//! of two surfaces is `S = −δ` (m). Three laws:
+//! - [`Adhesion::Reversible`]: dry, van der Waals type; `−f_max` in contact, rising linearly
+//!   to zero at `S = δ_a = f_max / k_c`, the same on approach and separation.
+//! - [`Adhesion::LiquidBridge`]: wet, Willett's capillary force. No attraction on approach;
+//!   a bridge forms at contact, pulls `−f_max` in contact and
+//!   `−f_max / (1 + 1.05 S̄ + 2.5 S̄²)`, `S̄ = S sqrt(r / V_b)`, on separation, and ruptures
+//!   past `S_c = (1 + θ/2) V_b^{1/3}`. Pair values use `r = 2 a_i a_j / (a_i + a_j)` and
+//!   `f_max = 2π r γ_s cos θ`.
+//! - [`Adhesion::LinearIrreversible`]: the bridge's loading path with a linear separation
+//!   branch `−(f_max − k_c S)`, rupture at `S_c = f_max / k_c`.
+
+use serde::{Deserialize, Serialize};
+use std::f64::consts::PI;
+
+/// An adhesive law.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub enum Adhesion {
+    /// No adhesion.
+    #[default]
+    None,
+    /// Reversible linear adhesion (000 Eq. 3).
+    Reversible {
+        /// Maximum adhesive force `f_a^max` (N).
+        max_force: f64,
+        /// Adhesive stiffness `k_c^a` (N/m).
+        stiffness: f64,
+    },
+    /// Irreversible Willett liquid bridge (002 Eqs. 10–15).
+    LiquidBridge {
+        /// Surface tension `γ_s` (N/m).
+        surface_tension: f64,
+        /// Contact angle `θ` (rad), in `[0, π/2)`.
+        contact_angle: f64,
+        /// Bridge volume `V_b` (m³).
+        volume: f64,
+    },
+    /// Irreversible linear adhesion (002 Eqs. 16–17).
+    LinearIrreversible {
+        /// Maximum adhesive force `f_a^max` (N).
+        max_force: f64,
+        /// Adhesive stiffness `k_c` (N/m) of the separation branch.
+        stiffness: f64,
+    },
+}
+
+/// The radius `r = 2 a_i a_j / (a_i + a_j)` (m) of a pair (twice the reduced radius); for a
+/// planar wall (`a_j = ∞`) it is `2 a_i`.
+#[inline]
+pub fn bridge_radius(a_i: f64, a_j: f64) -> f64 {
+    if a_j.is_finite() { 2.0 * a_i * a_j / (a_i + a_j) } else { 2.0 * a_i }
+}
+
+/// Willett's force factor `1 / (1 + 1.05 S̄ + 2.5 S̄²)` at scaled separation `S̄`.
+#[inline]
+pub fn willett_factor(s_bar: f64) -> f64 {
+    1.0 / (1.0 + s_bar * (1.05 + 2.5 * s_bar))
+}
+
+/// `∫₀^x dt / (1 + 1.05 t + 2.5 t²)`, in closed form (the quadratic has no real root).
+fn willett_integral(x: f64) -> f64 {
+    let (b, c): (f64, f64) = (1.05, 2.5);
+    let q = (4.0 * c - b * b).sqrt();
+    2.0 / q * (((2.0 * c * x + b) / q).atan() - (b / q).atan())
+}
+
+impl Adhesion {
+    /// Whether the law has any adhesion.
+    pub fn is_none(&self) -> bool {
+        matches!(self, Adhesion::None)
+    }
+
+    /// Whether the law needs a bridge formed at contact (irreversible laws).
+    #[inline]
+    pub fn needs_bridge(&self) -> bool {
+        matches!(self, Adhesion::LiquidBridge { .. } | Adhesion::LinearIrreversible { .. })
+    }
+
+    /// Range of the attraction beyond contact (m): `δ_a` or `S_c`; zero without adhesion.
+    pub fn range(&self) -> f64 {
+        match *self {
+            Adhesion::None => 0.0,
+            Adhesion::Reversible { max_force, stiffness } | Adhesion::LinearIrreversible { max_force, stiffness } => {
+                max_force / stiffness
+            }
+            Adhesion::LiquidBridge { contact_angle, volume, .. } => (1.0 + 0.5 * contact_angle) * volume.cbrt(),
+        }
+    }
+
+    /// Maximum adhesive force `f_a^max` (N) of a pair of radii `a_i`, `a_j` (m).
+    #[inline]
+    pub fn max_force(&self, a_i: f64, a_j: f64) -> f64 {
+        match *self {
+            Adhesion::None => 0.0,
+            Adhesion::Reversible { max_force, .. } | Adhesion::LinearIrreversible { max_force, .. } => max_force,
+            Adhesion::LiquidBridge { surface_tension, contact_angle, .. } => {
+                2.0 * PI * bridge_radius(a_i, a_j) * surface_tension * contact_angle.cos()
+            }
+        }
+    }
+
+    /// Adhesive force (N, ≤ 0) of a pair in contact (`δ ≥ 0`): `−f_a^max` for every law.
+    /// Irreversible laws form their bridge here.
+    #[inline]
+    pub fn contact_force(&self, a_i: f64, a_j: f64) -> f64 {
+        -self.max_force(a_i, a_j)
+    }
+
+    /// Adhesive force (N, ≤ 0) of a pair separated by `s > 0` (m), and whether the
+    /// bridge survives. `bridge` says whether an irreversible law's bridge exists.
+    #[inline]
+    pub fn separated_force(&self, s: f64, a_i: f64, a_j: f64, bridge: bool) -> (f64, bool) {
+        match *self {
+            Adhesion::None => (0.0, false),
+            Adhesion::Reversible { max_force, stiffness } => {
+                let f = stiffness * s - max_force;
+                (f.min(0.0), false)
+            }
+            Adhesion::LinearIrreversible { max_force, stiffness } => {
+                if bridge && s <= max_force / stiffness {
+                    (stiffness * s - max_force, true)
+                } else {
+                    (0.0, false)
+                }
+            }
+            Adhesion::LiquidBridge { volume, .. } => {
+                if bridge && s <= self.range() {
+                    let r = bridge_radius(a_i, a_j);
+                    let f = -self.max_force(a_i, a_j) * willett_factor(s * (r / volume).sqrt());
+                    (f, true)
+                } else {
+                    (0.0, false)
+                }
+            }
+        }
+    }
+
+    /// Work (J) the attraction still does before the pair is free, from separation `s ≥ 0`
+    /// (m) with a live bridge: `∫_s^{range} f_a dS` (≤ 0). It is the adhesive potential
+    /// energy of a pair at `s` relative to separated particles.
+    pub fn separation_energy(&self, s: f64, a_i: f64, a_j: f64) -> f64 {
+        let range = self.range();
+        if s >= range {
+            return 0.0;
+        }
+        let f_max = self.max_force(a_i, a_j);
+        match *self {
+            Adhesion::None => 0.0,
+            Adhesion::Reversible { stiffness, .. } | Adhesion::LinearIrreversible { stiffness, .. } => {
+                -0.5 * stiffness * (range - s) * (range - s)
+            }
+            Adhesion::LiquidBridge { volume, .. } => {
+                let scale = (bridge_radius(a_i, a_j) / volume).sqrt();
+                -f_max / scale * (willett_integral(range * scale) - willett_integral(s * scale))
+            }
+        }
+    }
+
+    /// Adhesive potential energy (J) of a pair at overlap `δ` (m): the separation energy from
+    /// contact plus `−f_max δ` inside the contact; zero for a pair without a bridge under an
+    /// irreversible law.
+    pub fn potential(&self, overlap: f64, a_i: f64, a_j: f64, bridge: bool) -> f64 {
+        if self.is_none() || (self.needs_bridge() && !bridge) {
+            return 0.0;
+        }
+        if overlap >= 0.0 {
+            self.separation_energy(0.0, a_i, a_j) - self.max_force(a_i, a_j) * overlap
+        } else {
+            self.separation_energy(-overlap, a_i, a_j)
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const A: f64 = 1.1e-3;
+
+    fn bridge() -> Adhesion {
+        Adhesion::LiquidBridge {
+            surface_tension: 0.02,
+            contact_angle: 20f64.to_radians(),
+            volume: 75e-12,
+        }
+    }
+
+    #[test]
+    fn rupture_distance_matches_seed_correction() {
+        // 75 nl, θ = 20°: S_c = 0.495 mm (PHYSICS §2.4 correction of "4.95 nm").
+        assert!((bridge().range() - 0.4953e-3).abs() < 1e-7);
+    }
+
+    #[test]
+    fn willett_energy_matches_simpson_quadrature() {
+        let b = bridge();
+        let (a_i, a_j) = (A, 0.7 * A);
+        let n = 20000;
+        let h = b.range() / n as f64;
+        let f = |s: f64| b.separated_force(s, a_i, a_j, true).0;
+        let mut sum = f(0.0) + f(b.range());
+        for k in 1..n {
+            sum += f(k as f64 * h) * if k % 2 == 1 { 4.0 } else { 2.0 };
+        }
+        let quad = sum * h / 3.0;
+        let closed = b.separation_energy(0.0, a_i, a_j);
+        assert!(((quad - closed) / closed).abs() < 1e-10, "{quad} vs {closed}");
+    }
+
+    #[test]
+    fn reversible_potential_is_continuous_and_zero_at_range() {
+        let r = Adhesion::Reversible { max_force: 2.0, stiffness: 4.0 };
+        assert_eq!(r.range(), 0.5);
+        assert_eq!(r.potential(-0.5, A, A, false), 0.0);
+        assert!((r.potential(0.0, A, A, false) - (-0.5 * 2.0 * 0.5)).abs() < 1e-15);
+        assert!((r.potential(-1e-12, A, A, false) - r.potential(0.0, A, A, false)).abs() < 1e-11);
+    }
+}
