@@ -1,8 +1,11 @@
 //! The `rheodem` command-line program: run a scenario, resume a run, benchmark the engine.
 
+mod contact;
+
 use anyhow::{Context, Result, bail};
 use clap::{Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
+use rheodem::bench::BenchCohesion;
 use rheodem::run::Run;
 use rheodem::scenario::Scenario;
 use std::path::{Path, PathBuf};
@@ -50,6 +53,9 @@ enum Command {
         #[arg(long, short)]
         quiet: bool,
     },
+    /// Contact-law tools: force–overlap curves, equivalent linear model.
+    #[command(subcommand)]
+    Contact(contact::ContactCommand),
     /// Check a scenario and print its resolved values without running it.
     Check {
         /// The scenario (TOML).
@@ -66,7 +72,21 @@ enum Command {
         /// Timed steps.
         #[arg(long, default_value_t = 3000)]
         steps: u64,
+        /// Cohesion variants to measure (default: all three).
+        #[arg(long, value_enum, value_delimiter = ',')]
+        cohesion: Vec<BenchCohesionArg>,
     },
+}
+
+/// Cohesion variants of the benchmark.
+#[derive(Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+enum BenchCohesionArg {
+    /// Plain Hooke + tangential history.
+    None,
+    /// Reversible adhesion, f_a^max = 185 (Bo ≈ 1), k_c = k_n.
+    Reversible,
+    /// Willett liquid bridges, same f_a^max, S_c = 0.225 d.
+    LiquidBridge,
 }
 
 /// The scenario `rheodem run` uses when given none.
@@ -177,6 +197,7 @@ fn run(cli: Cli) -> Result<()> {
             }
             advance(&pool, &mut r, &dir, quiet)
         }
+        Command::Contact(cmd) => contact::run(cmd),
         Command::Check { scenario } => {
             let sc = Scenario::from_file(&scenario)?;
             let base = scenario.parent().unwrap_or(Path::new("."));
@@ -188,6 +209,7 @@ fn run(cli: Cli) -> Result<()> {
             threads,
             warmup,
             steps,
+            cohesion,
         } => {
             let all = std::thread::available_parallelism().map_or(1, |n| n.get());
             let counts = if threads.is_empty() {
@@ -195,32 +217,53 @@ fn run(cli: Cli) -> Result<()> {
             } else {
                 threads
             };
+            let variants = if cohesion.is_empty() {
+                vec![
+                    BenchCohesionArg::None,
+                    BenchCohesionArg::Reversible,
+                    BenchCohesionArg::LiquidBridge,
+                ]
+            } else {
+                cohesion
+            };
             println!("standard problem: {}", rheodem::bench::DESCRIPTION);
-            for n in counts {
-                let (pool, n) = pool(Some(n))?;
-                let r = pool.install(|| {
-                    let mut sim = rheodem::bench::standard_problem(1.0);
-                    rheodem::bench::run_timed(&mut sim, warmup, steps)
-                });
-                let total = r.loop_time.as_secs_f64();
-                let pct = |d: std::time::Duration| 100.0 * d.as_secs_f64() / total;
-                println!(
-                    "threads {n}: {} particles × {} steps in {:.3} s — neighbours {:.1} % ({} rebuilds), forces {:.1} %, integration {:.1} %; P = {:.1}, Z = {:.2}",
-                    r.particles,
-                    r.steps,
-                    total,
-                    pct(r.neighbor_time),
-                    r.rebuilds,
-                    pct(r.force_time),
-                    pct(r.integrate_time),
-                    r.pressure,
-                    r.coordination
-                );
-                println!(
-                    "throughput: {:.0} particle-steps/s ({:.2} M, threads {n})",
-                    r.particle_steps_per_second(),
-                    r.particle_steps_per_second() / 1e6
-                );
+            for variant in variants {
+                let (cohesion, name) = match variant {
+                    BenchCohesionArg::None => (BenchCohesion::None, "frictional"),
+                    BenchCohesionArg::Reversible => {
+                        (BenchCohesion::Reversible, "reversible adhesion")
+                    }
+                    BenchCohesionArg::LiquidBridge => {
+                        (BenchCohesion::LiquidBridge, "liquid bridges")
+                    }
+                };
+                for &n in &counts {
+                    let (pool, n) = pool(Some(n))?;
+                    let r = pool.install(|| {
+                        let mut sim = rheodem::bench::standard_problem(1.0, cohesion);
+                        rheodem::bench::run_timed(&mut sim, warmup, steps)
+                    });
+                    let total = r.loop_time.as_secs_f64();
+                    let pct = |d: std::time::Duration| 100.0 * d.as_secs_f64() / total;
+                    println!(
+                        "{name}, threads {n}: {} particles × {} steps in {:.3} s — neighbours {:.1} % ({} rebuilds, {:.1} pairs/particle), forces {:.1} %, integration {:.1} %; P = {:.1}, Z = {:.2}",
+                        r.particles,
+                        r.steps,
+                        total,
+                        pct(r.neighbor_time),
+                        r.rebuilds,
+                        r.pairs_per_particle,
+                        pct(r.force_time),
+                        pct(r.integrate_time),
+                        r.pressure,
+                        r.coordination
+                    );
+                    println!(
+                        "throughput: {:.0} particle-steps/s ({:.2} M, {name}, threads {n})",
+                        r.particle_steps_per_second(),
+                        r.particle_steps_per_second() / 1e6
+                    );
+                }
             }
             Ok(())
         }

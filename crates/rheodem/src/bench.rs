@@ -43,9 +43,47 @@ pub fn bench_law() -> ContactLaw {
     }
 }
 
+/// Cohesion variants of the standard problem (issue "cohesive contact laws").
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum BenchCohesion {
+    /// The plain frictional law.
+    None,
+    /// Reversible adhesion, `f_a^max = p d² = 185` (`Bo ≈ 1` at the steady mean stress
+    /// `p ≈ 185`, `d = 1`), `k_c = k_n`.
+    Reversible,
+    /// Willett bridges with the same `f_a^max` for the mean pair (`r = 0.5`, `θ = 20°`) and
+    /// `S_c = 0.225 d`.
+    LiquidBridge,
+}
+
+/// `f_a^max` of the cohesive variants (model units).
+const BENCH_MAX_FORCE: f64 = 185.0;
+
+impl BenchCohesion {
+    /// The adhesive law of the variant.
+    pub fn adhesion(self) -> Adhesion {
+        match self {
+            BenchCohesion::None => Adhesion::None,
+            BenchCohesion::Reversible => Adhesion::Reversible {
+                max_force: BENCH_MAX_FORCE,
+                stiffness: 1.0e4,
+            },
+            BenchCohesion::LiquidBridge => {
+                let theta = 20f64.to_radians();
+                Adhesion::LiquidBridge {
+                    surface_tension: BENCH_MAX_FORCE
+                        / (2.0 * std::f64::consts::PI * 0.5 * theta.cos()),
+                    contact_angle: theta,
+                    volume: (0.225 / (1.0 + 0.5 * theta)).powi(3),
+                }
+            }
+        }
+    }
+}
+
 /// Builds the standard problem with shear rate `shear_rate` (model units) of the initial
-/// affine profile.
-pub fn standard_problem(shear_rate: f64) -> Simulation {
+/// affine profile and the given cohesion.
+pub fn standard_problem(shear_rate: f64, cohesion: BenchCohesion) -> Simulation {
     let packing = parse_packing(PACKING).expect("the shipped packing is valid");
     let edge = packing
         .box_edge
@@ -72,7 +110,13 @@ pub fn standard_problem(shear_rate: f64) -> Simulation {
     Simulation::new(
         particles,
         domain,
-        ContactTable::uniform(1, bench_law()),
+        ContactTable::uniform(
+            1,
+            ContactLaw {
+                adhesion: cohesion.adhesion(),
+                ..bench_law()
+            },
+        ),
         Vec::new(),
         DVec3::ZERO,
         3.2e-4,
@@ -104,6 +148,8 @@ pub struct BenchReport {
     pub pressure: f64,
     /// Coordination number at the end.
     pub coordination: f64,
+    /// Neighbour-list pairs per particle at the end.
+    pub pairs_per_particle: f64,
 }
 
 impl BenchReport {
@@ -150,5 +196,6 @@ pub fn run_timed(sim: &mut Simulation, warmup: u64, steps: u64) -> BenchReport {
         rebuilds: sim.neighbors.builds - builds0,
         pressure: obs.mean_stress(),
         coordination: obs.coordination,
+        pairs_per_particle: sim.neighbors.len() as f64 / sim.particles.len() as f64,
     }
 }

@@ -171,7 +171,10 @@ fn chunk_forces<const MEASURE: bool>(
             let (v_j, w_j) = if code == IDENTITY_IMAGE {
                 (inp.velocity[j], inp.omega[j])
             } else {
-                (image.velocity(inp.velocity[j]), image.angular_velocity(inp.omega[j]))
+                (
+                    image.velocity(inp.velocity[j]),
+                    image.angular_velocity(inp.omega[j]),
+                )
             };
             let kin = PairKinematics {
                 normal: branch / dist,
@@ -195,7 +198,12 @@ fn chunk_forces<const MEASURE: bool>(
             force[j] -= pf.force;
             torque[j] += pf.torque_j;
             if MEASURE {
-                obs.add_pair(&pf, &kin, law.elastic_energy(kin.overlap, a_i, kin.radius_j, h), branch);
+                obs.add_pair(
+                    &pf,
+                    &kin,
+                    law.elastic_energy(kin.overlap, a_i, kin.radius_j, h),
+                    branch,
+                );
             }
         }
         force[i] += f_i;

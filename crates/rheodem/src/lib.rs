@@ -14,6 +14,7 @@ pub mod io;
 pub mod measure;
 pub mod neighbor;
 pub mod particles;
+pub mod plot;
 pub mod run;
 pub mod scenario;
 pub mod simulation;

@@ -50,7 +50,11 @@ pub enum Adhesion {
 /// planar wall (`a_j = ∞`) it is `2 a_i`.
 #[inline]
 pub fn bridge_radius(a_i: f64, a_j: f64) -> f64 {
-    if a_j.is_finite() { 2.0 * a_i * a_j / (a_i + a_j) } else { 2.0 * a_i }
+    if a_j.is_finite() {
+        2.0 * a_i * a_j / (a_i + a_j)
+    } else {
+        2.0 * a_i
+    }
 }
 
 /// Willett's force factor `1 / (1 + 1.05 S̄ + 2.5 S̄²)` at scaled separation `S̄`.
@@ -75,17 +79,29 @@ impl Adhesion {
     /// Whether the law needs a bridge formed at contact (irreversible laws).
     #[inline]
     pub fn needs_bridge(&self) -> bool {
-        matches!(self, Adhesion::LiquidBridge { .. } | Adhesion::LinearIrreversible { .. })
+        matches!(
+            self,
+            Adhesion::LiquidBridge { .. } | Adhesion::LinearIrreversible { .. }
+        )
     }
 
     /// Range of the attraction beyond contact (m): `δ_a` or `S_c`; zero without adhesion.
     pub fn range(&self) -> f64 {
         match *self {
             Adhesion::None => 0.0,
-            Adhesion::Reversible { max_force, stiffness } | Adhesion::LinearIrreversible { max_force, stiffness } => {
-                max_force / stiffness
+            Adhesion::Reversible {
+                max_force,
+                stiffness,
             }
-            Adhesion::LiquidBridge { contact_angle, volume, .. } => (1.0 + 0.5 * contact_angle) * volume.cbrt(),
+            | Adhesion::LinearIrreversible {
+                max_force,
+                stiffness,
+            } => max_force / stiffness,
+            Adhesion::LiquidBridge {
+                contact_angle,
+                volume,
+                ..
+            } => (1.0 + 0.5 * contact_angle) * volume.cbrt(),
         }
     }
 
@@ -94,10 +110,13 @@ impl Adhesion {
     pub fn max_force(&self, a_i: f64, a_j: f64) -> f64 {
         match *self {
             Adhesion::None => 0.0,
-            Adhesion::Reversible { max_force, .. } | Adhesion::LinearIrreversible { max_force, .. } => max_force,
-            Adhesion::LiquidBridge { surface_tension, contact_angle, .. } => {
-                2.0 * PI * bridge_radius(a_i, a_j) * surface_tension * contact_angle.cos()
-            }
+            Adhesion::Reversible { max_force, .. }
+            | Adhesion::LinearIrreversible { max_force, .. } => max_force,
+            Adhesion::LiquidBridge {
+                surface_tension,
+                contact_angle,
+                ..
+            } => 2.0 * PI * bridge_radius(a_i, a_j) * surface_tension * contact_angle.cos(),
         }
     }
 
@@ -114,11 +133,17 @@ impl Adhesion {
     pub fn separated_force(&self, s: f64, a_i: f64, a_j: f64, bridge: bool) -> (f64, bool) {
         match *self {
             Adhesion::None => (0.0, false),
-            Adhesion::Reversible { max_force, stiffness } => {
+            Adhesion::Reversible {
+                max_force,
+                stiffness,
+            } => {
                 let f = stiffness * s - max_force;
                 (f.min(0.0), false)
             }
-            Adhesion::LinearIrreversible { max_force, stiffness } => {
+            Adhesion::LinearIrreversible {
+                max_force,
+                stiffness,
+            } => {
                 if bridge && s <= max_force / stiffness {
                     (stiffness * s - max_force, true)
                 } else {
@@ -148,7 +173,8 @@ impl Adhesion {
         let f_max = self.max_force(a_i, a_j);
         match *self {
             Adhesion::None => 0.0,
-            Adhesion::Reversible { stiffness, .. } | Adhesion::LinearIrreversible { stiffness, .. } => {
+            Adhesion::Reversible { stiffness, .. }
+            | Adhesion::LinearIrreversible { stiffness, .. } => {
                 -0.5 * stiffness * (range - s) * (range - s)
             }
             Adhesion::LiquidBridge { volume, .. } => {
@@ -206,12 +232,18 @@ mod tests {
         }
         let quad = sum * h / 3.0;
         let closed = b.separation_energy(0.0, a_i, a_j);
-        assert!(((quad - closed) / closed).abs() < 1e-10, "{quad} vs {closed}");
+        assert!(
+            ((quad - closed) / closed).abs() < 1e-10,
+            "{quad} vs {closed}"
+        );
     }
 
     #[test]
     fn reversible_potential_is_continuous_and_zero_at_range() {
-        let r = Adhesion::Reversible { max_force: 2.0, stiffness: 4.0 };
+        let r = Adhesion::Reversible {
+            max_force: 2.0,
+            stiffness: 4.0,
+        };
         assert_eq!(r.range(), 0.5);
         assert_eq!(r.potential(-0.5, A, A, false), 0.0);
         assert!((r.potential(0.0, A, A, false) - (-0.5 * 2.0 * 0.5)).abs() < 1e-15);

@@ -9,6 +9,8 @@
 //! force acts on `i`, and `−force` on `j`.
 
 pub mod adhesion;
+pub mod curve;
+pub mod equivalent;
 pub mod friction;
 pub mod normal;
 
@@ -112,7 +114,12 @@ impl ContactLaw {
     /// `None` when the pair does not interact; its history is then reset (an irreversible
     /// bridge past its rupture distance is gone).
     #[inline]
-    pub fn interact(&self, k: &PairKinematics, h: &mut ContactHistory, dt: f64) -> Option<PairForce> {
+    pub fn interact(
+        &self,
+        k: &PairKinematics,
+        h: &mut ContactHistory,
+        dt: f64,
+    ) -> Option<PairForce> {
         if k.overlap > 0.0 {
             return Some(self.evaluate(k, h, dt));
         }
@@ -122,7 +129,9 @@ impl ContactLaw {
         if self.adhesion.is_none() {
             return None;
         }
-        let (f_a, alive) = self.adhesion.separated_force(-k.overlap, k.radius_i, k.radius_j, bridge);
+        let (f_a, alive) = self
+            .adhesion
+            .separated_force(-k.overlap, k.radius_i, k.radius_j, bridge);
         h.bridge = alive;
         (f_a != 0.0).then(|| PairForce {
             force: k.normal * f_a,

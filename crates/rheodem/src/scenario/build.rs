@@ -270,42 +270,82 @@ fn resistance(
 }
 
 fn adhesion(key: &str, spec: &Option<AdhesionSpec>) -> Result<Adhesion, ScenarioError> {
-    let linear = |max_force: f64, stiffness: Option<f64>, range: Option<f64>| -> Result<(f64, f64), ScenarioError> {
+    let linear = |max_force: f64,
+                  stiffness: Option<f64>,
+                  range: Option<f64>|
+     -> Result<(f64, f64), ScenarioError> {
         let f = positive(&format!("{key}.max_force"), max_force)?;
-        at_most_one(key, &[("stiffness", stiffness.is_some()), ("range", range.is_some())])?;
+        at_most_one(
+            key,
+            &[
+                ("stiffness", stiffness.is_some()),
+                ("range", range.is_some()),
+            ],
+        )?;
         let k = match (stiffness, range) {
             (Some(k), _) => positive(&format!("{key}.stiffness"), k)?,
             (None, Some(r)) => f / positive(&format!("{key}.range"), r)?,
             (None, None) => {
-                return Err(invalid(format!("{key}.stiffness"), "(missing)", "give `stiffness` (N/m) or `range` (m)"));
+                return Err(invalid(
+                    format!("{key}.stiffness"),
+                    "(missing)",
+                    "give `stiffness` (N/m) or `range` (m)",
+                ));
             }
         };
         Ok((f, k))
     };
     Ok(match spec {
         None => Adhesion::None,
-        Some(AdhesionSpec::Reversible { max_force, stiffness, range }) => {
+        Some(AdhesionSpec::Reversible {
+            max_force,
+            stiffness,
+            range,
+        }) => {
             let (max_force, stiffness) = linear(*max_force, *stiffness, *range)?;
-            Adhesion::Reversible { max_force, stiffness }
+            Adhesion::Reversible {
+                max_force,
+                stiffness,
+            }
         }
-        Some(AdhesionSpec::LinearIrreversible { max_force, stiffness, range }) => {
+        Some(AdhesionSpec::LinearIrreversible {
+            max_force,
+            stiffness,
+            range,
+        }) => {
             let (max_force, stiffness) = linear(*max_force, *stiffness, *range)?;
-            Adhesion::LinearIrreversible { max_force, stiffness }
+            Adhesion::LinearIrreversible {
+                max_force,
+                stiffness,
+            }
         }
-        Some(AdhesionSpec::LiquidBridge { surface_tension, contact_angle_deg, volume }) => {
+        Some(AdhesionSpec::LiquidBridge {
+            surface_tension,
+            contact_angle_deg,
+            volume,
+        }) => {
             let gamma = positive(&format!("{key}.surface_tension"), *surface_tension)?;
             let theta = *contact_angle_deg;
             if !(theta.is_finite() && (0.0..90.0).contains(&theta)) {
-                return Err(invalid(format!("{key}.contact_angle_deg"), theta, "must lie in [0, 90) degrees: a bridge with θ ≥ 90° does not attract"));
+                return Err(invalid(
+                    format!("{key}.contact_angle_deg"),
+                    theta,
+                    "must lie in [0, 90) degrees: a bridge with θ ≥ 90° does not attract",
+                ));
             }
             let v = positive(&format!("{key}.volume"), *volume)
                 .map_err(|_| invalid(format!("{key}.volume"), volume, "must be positive (m³): a bridge of no volume has no rupture distance; omit `adhesion` for dry contacts"))?;
-            Adhesion::LiquidBridge { surface_tension: gamma, contact_angle: theta.to_radians(), volume: v }
+            Adhesion::LiquidBridge {
+                surface_tension: gamma,
+                contact_angle: theta.to_radians(),
+                volume: v,
+            }
         }
     })
 }
 
-fn contact_table(s: &Scenario) -> Result<ContactTable, ScenarioError> {
+/// The validated contact laws of a scenario, indexed by species in declaration order.
+pub fn contact_table(s: &Scenario) -> Result<ContactTable, ScenarioError> {
     let ns = s.species.len();
     let mut default = None;
     let mut pairs = Vec::new();
@@ -321,14 +361,25 @@ fn contact_table(s: &Scenario) -> Result<ContactTable, ScenarioError> {
         };
         match &c.species {
             None if default.is_some() => {
-                return Err(invalid(format!("{key}.species"), "(missing)", "only one default [[contact]] (without `species`) is allowed"));
+                return Err(invalid(
+                    format!("{key}.species"),
+                    "(missing)",
+                    "only one default [[contact]] (without `species`) is allowed",
+                ));
             }
             None => default = Some(law),
             Some([a, b]) => {
                 let ia = species_index(&format!("{key}.species[0]"), a, &s.species)? as usize;
                 let ib = species_index(&format!("{key}.species[1]"), b, &s.species)? as usize;
-                if pairs.iter().any(|&(x, y, _)| (x, y) == (ia, ib) || (x, y) == (ib, ia)) {
-                    return Err(invalid(format!("{key}.species"), format!("[\"{a}\", \"{b}\"]"), "this pair already has a contact law"));
+                if pairs
+                    .iter()
+                    .any(|&(x, y, _)| (x, y) == (ia, ib) || (x, y) == (ib, ia))
+                {
+                    return Err(invalid(
+                        format!("{key}.species"),
+                        format!("[\"{a}\", \"{b}\"]"),
+                        "this pair already has a contact law",
+                    ));
                 }
                 pairs.push((ia, ib, law));
             }
@@ -343,7 +394,10 @@ fn contact_table(s: &Scenario) -> Result<ContactTable, ScenarioError> {
         let (a, b) = (missing / ns, missing % ns);
         return Err(invalid(
             "contact",
-            format!("no law for [\"{}\", \"{}\"]", s.species[a].name, s.species[b].name),
+            format!(
+                "no law for [\"{}\", \"{}\"]",
+                s.species[a].name, s.species[b].name
+            ),
             "give a default [[contact]] without `species`, or one for every species pair",
         ));
     }
@@ -809,9 +863,8 @@ pub fn build(s: &Scenario, base_dir: &Path) -> Result<Built, ScenarioError> {
     };
 
     let box_error = |e: NeighborError| invalid("domain.size", format!("{size:?}"), e.to_string());
-    let mut simulation =
-        Simulation::new(particles, domain, laws, plane_walls, gravity, dt, skin)
-            .map_err(box_error)?;
+    let mut simulation = Simulation::new(particles, domain, laws, plane_walls, gravity, dt, skin)
+        .map_err(box_error)?;
     let preparation = match target {
         None => None,
         Some((target, strain_rate, relax_steps)) => Some(

@@ -1,0 +1,295 @@
+//! `rheodem contact …`: force–overlap curves and the equivalent linear model.
+
+use anyhow::{Context, Result, bail};
+use clap::{Args, Subcommand, ValueEnum};
+use rheodem::contact::curve::{drive, standard_cycle};
+use rheodem::contact::equivalent::equivalent_linear;
+use rheodem::contact::{Adhesion, ContactLaw, Damping, NormalLaw, Resistance};
+use rheodem::io::atomic::write_atomic;
+use rheodem::plot::{Labels, Series, line_plot_svg};
+use rheodem::scenario::{Scenario, contact_table};
+use std::fmt::Write;
+use std::path::PathBuf;
+
+/// Contact-law tools.
+#[derive(Subcommand)]
+pub enum ContactCommand {
+    /// Drive two particles through approach, separation past the range and a second
+    /// approach; write the force–overlap curve as CSV and SVG.
+    Curve(CurveArgs),
+    /// The linear irreversible laws equivalent to a Willett liquid bridge (seed 002 Sect. 4).
+    Equivalent(EquivalentArgs),
+}
+
+/// Adhesive law chosen on the command line.
+#[derive(Clone, Copy, ValueEnum)]
+pub enum LawName {
+    /// No adhesion.
+    None,
+    /// Reversible linear adhesion.
+    Reversible,
+    /// Willett liquid bridge.
+    LiquidBridge,
+    /// Linear irreversible adhesion.
+    LinearIrreversible,
+}
+
+/// Arguments of `contact curve`.
+#[derive(Args)]
+pub struct CurveArgs {
+    /// Take the law from this scenario file (with --pair); otherwise from the flags below.
+    #[arg(long)]
+    scenario: Option<PathBuf>,
+    /// Species pair of the scenario, e.g. `glass,glass` (default: the first species twice).
+    #[arg(long, value_delimiter = ',')]
+    pair: Vec<String>,
+    /// Adhesive law (without --scenario).
+    #[arg(long, value_enum, default_value = "liquid-bridge")]
+    law: LawName,
+    /// Normal stiffness k_n (N/m).
+    #[arg(long, default_value_t = 100.0)]
+    stiffness: f64,
+    /// Maximum adhesive force f_a^max (N) of the linear laws.
+    #[arg(long, default_value_t = 1.3e-4)]
+    max_force: f64,
+    /// Adhesive stiffness k_c (N/m) of the linear laws.
+    #[arg(long, default_value_t = 100.0)]
+    adhesive_stiffness: f64,
+    /// Surface tension γ_s (N/m) of the liquid bridge.
+    #[arg(long, default_value_t = 0.02)]
+    surface_tension: f64,
+    /// Contact angle θ (degrees) of the liquid bridge.
+    #[arg(long, default_value_t = 20.0)]
+    contact_angle_deg: f64,
+    /// Bridge volume V_b (m³).
+    #[arg(long, default_value_t = 75e-12)]
+    volume: f64,
+    /// Radius of the first particle (m).
+    #[arg(long, default_value_t = 1.1e-3)]
+    radius_i: f64,
+    /// Radius of the second particle (m).
+    #[arg(long, default_value_t = 1.1e-3)]
+    radius_j: f64,
+    /// Largest overlap of the cycle (m); default: 3 f_a^max / k_n, or 1 % of the smaller radius.
+    #[arg(long)]
+    max_overlap: Option<f64>,
+    /// Points per leg of the cycle.
+    #[arg(long, default_value_t = 400)]
+    points: usize,
+    /// Output prefix: writes PREFIX.csv and PREFIX.svg.
+    #[arg(long, short, default_value = "contact-curve")]
+    out: PathBuf,
+}
+
+/// Arguments of `contact equivalent`.
+#[derive(Args)]
+pub struct EquivalentArgs {
+    /// Surface tension γ_s (N/m).
+    #[arg(long, default_value_t = 0.02)]
+    surface_tension: f64,
+    /// Contact angle θ (degrees).
+    #[arg(long, default_value_t = 20.0)]
+    contact_angle_deg: f64,
+    /// Bridge volumes V_b in nanolitres (comma-separated).
+    #[arg(long, value_delimiter = ',', default_values_t = [0.0, 1.0, 2.0, 4.2, 8.0, 14.0, 20.0, 75.0, 140.0, 200.0])]
+    volume_nl: Vec<f64>,
+    /// Particle diameter (m); both particles unless --diameter-j is given.
+    #[arg(long, default_value_t = 2.2e-3)]
+    diameter: f64,
+    /// Diameter of the second particle (m).
+    #[arg(long)]
+    diameter_j: Option<f64>,
+}
+
+/// Runs a `contact` subcommand.
+pub fn run(cmd: ContactCommand) -> Result<()> {
+    match cmd {
+        ContactCommand::Curve(a) => curve(a),
+        ContactCommand::Equivalent(a) => equivalent(a),
+    }
+}
+
+fn flag_law(a: &CurveArgs) -> Result<ContactLaw> {
+    let positive = |name: &str, v: f64| {
+        if v.is_finite() && v > 0.0 {
+            Ok(v)
+        } else {
+            bail!("--{name} = {v}: must be a positive finite number")
+        }
+    };
+    let adhesion = match a.law {
+        LawName::None => Adhesion::None,
+        LawName::Reversible => Adhesion::Reversible {
+            max_force: positive("max-force", a.max_force)?,
+            stiffness: positive("adhesive-stiffness", a.adhesive_stiffness)?,
+        },
+        LawName::LinearIrreversible => Adhesion::LinearIrreversible {
+            max_force: positive("max-force", a.max_force)?,
+            stiffness: positive("adhesive-stiffness", a.adhesive_stiffness)?,
+        },
+        LawName::LiquidBridge => {
+            if !(0.0..90.0).contains(&a.contact_angle_deg) {
+                bail!(
+                    "--contact-angle-deg = {}: must lie in [0, 90)",
+                    a.contact_angle_deg
+                );
+            }
+            Adhesion::LiquidBridge {
+                surface_tension: positive("surface-tension", a.surface_tension)?,
+                contact_angle: a.contact_angle_deg.to_radians(),
+                volume: positive("volume", a.volume)?,
+            }
+        }
+    };
+    Ok(ContactLaw {
+        normal: NormalLaw {
+            stiffness: positive("stiffness", a.stiffness)?,
+            damping: Damping::NONE,
+        },
+        tangential: Resistance::NONE,
+        rolling: Resistance::NONE,
+        torsion: Resistance::NONE,
+        adhesion,
+    })
+}
+
+fn curve(a: CurveArgs) -> Result<()> {
+    let law = match &a.scenario {
+        None => flag_law(&a)?,
+        Some(path) => {
+            let sc = Scenario::from_file(path)?;
+            let table = contact_table(&sc)?;
+            let index = |name: &str| {
+                sc.species
+                    .iter()
+                    .position(|s| s.name == name)
+                    .with_context(|| format!("--pair: no species \"{name}\" in {}", path.display()))
+            };
+            let (i, j) = match a.pair.as_slice() {
+                [] => (0, 0),
+                [x, y] => (index(x)?, index(y)?),
+                other => bail!("--pair takes two species names, got {}", other.len()),
+            };
+            *table.get(i as u16, j as u16)
+        }
+    };
+    for (name, r) in [("radius-i", a.radius_i), ("radius-j", a.radius_j)] {
+        if !(r.is_finite() && r > 0.0) {
+            bail!("--{name} = {r}: must be a positive finite number");
+        }
+    }
+    let f_max = law.adhesion.max_force(a.radius_i, a.radius_j);
+    let max_overlap = a.max_overlap.unwrap_or(if f_max > 0.0 {
+        3.0 * f_max / law.normal.stiffness
+    } else {
+        0.01 * a.radius_i.min(a.radius_j)
+    });
+    let range = law.range();
+    let gap = if range > 0.0 {
+        1.3 * range
+    } else {
+        max_overlap
+    };
+    let path = standard_cycle(gap, max_overlap, gap, a.points.max(2));
+    let curve = drive(&law, a.radius_i, a.radius_j, &path);
+
+    let mut csv = String::from("leg,overlap_m,normal_force_N,repulsive_N,adhesive_N,bridge\n");
+    let leg_len = a.points.max(2);
+    let mut legs: [Vec<(f64, f64)>; 3] = Default::default();
+    for (k, p) in curve.iter().enumerate() {
+        let leg = if k == 0 {
+            0
+        } else {
+            ((k - 1) / leg_len).min(2)
+        };
+        let _ = writeln!(
+            csv,
+            "{},{:e},{:e},{:e},{:e},{}",
+            ["approach", "separation", "re-approach"][leg],
+            p.overlap,
+            p.normal_force,
+            p.repulsive,
+            p.adhesive,
+            u8::from(p.bridge)
+        );
+        legs[leg].push((p.overlap * 1e3, p.normal_force * 1e3));
+    }
+    let csv_path = a.out.with_extension("csv");
+    write_atomic(&csv_path, csv.as_bytes())
+        .with_context(|| format!("writing {}", csv_path.display()))?;
+    let svg = line_plot_svg(
+        &Labels {
+            title: "normal force against overlap",
+            x: "overlap δ (mm)",
+            y: "normal force (mN)",
+        },
+        &[
+            Series {
+                label: "first approach",
+                points: &legs[0],
+            },
+            Series {
+                label: "separation",
+                points: &legs[1],
+            },
+            Series {
+                label: "second approach",
+                points: &legs[2],
+            },
+        ],
+    )
+    .map_err(|e| anyhow::anyhow!("plotting failed: {e}"))?;
+    let svg_path = a.out.with_extension("svg");
+    write_atomic(&svg_path, svg.as_bytes())
+        .with_context(|| format!("writing {}", svg_path.display()))?;
+    println!(
+        "f_a^max = {f_max:.4e} N, range = {range:.4e} m; wrote {} and {}",
+        csv_path.display(),
+        svg_path.display()
+    );
+    Ok(())
+}
+
+fn equivalent(a: EquivalentArgs) -> Result<()> {
+    let d_j = a.diameter_j.unwrap_or(a.diameter);
+    if !(a.diameter > 0.0 && d_j > 0.0) {
+        bail!("--diameter and --diameter-j must be positive");
+    }
+    if !(a.surface_tension >= 0.0) || !(0.0..90.0).contains(&a.contact_angle_deg) {
+        bail!("--surface-tension must be ≥ 0 and --contact-angle-deg in [0, 90)");
+    }
+    println!(
+        "Willett bridge, γ_s = {} N/m, θ = {}°, d = {} / {} m (r = harmonic-mean radius)",
+        a.surface_tension, a.contact_angle_deg, a.diameter, d_j
+    );
+    println!(
+        "{:>8} {:>12} {:>12} {:>12} {:>16} {:>16}",
+        "V_b (nl)", "f_max (N)", "S_c (m)", "E (J)", "k_c equal S_c", "k_c equal E"
+    );
+    for &v in &a.volume_nl {
+        if !(v >= 0.0 && v.is_finite()) {
+            bail!("--volume-nl = {v}: volumes must be finite and ≥ 0");
+        }
+        match equivalent_linear(
+            a.surface_tension,
+            a.contact_angle_deg.to_radians(),
+            v * 1e-12,
+            0.5 * a.diameter,
+            0.5 * d_j,
+        ) {
+            Some(e) => println!(
+                "{v:>8} {:>12.4e} {:>12.4e} {:>12.4e} {:>12.4} N/m {:>12.4} N/m",
+                e.max_force,
+                e.rupture_distance,
+                e.energy,
+                e.equal_range_stiffness,
+                e.equal_energy_stiffness
+            ),
+            None => println!(
+                "{v:>8} {:>12} {:>12} {:>12} {:>16} {:>16}",
+                "-", "0", "0", "∞", "∞"
+            ),
+        }
+    }
+    Ok(())
+}
