@@ -75,7 +75,22 @@ impl ImageTransform {
     }
 }
 
-/// An axis-aligned box `[lo, hi]` with per-axis periodicity.
+/// Lees-Edwards boundaries in the lab-frame convention (PHYSICS §3): shear along `x`,
+/// gradient along `y`. The image across `y = L_y` is shifted by `shift` in `x` and moves
+/// `γ̇ L_y` faster in `x`.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct LeesEdwards {
+    /// Shear rate `γ̇` (1/s).
+    pub shear_rate: f64,
+    /// Accumulated shift `s = ∫ γ̇ L_y dt`, kept in `[−L_x/2, L_x/2)` (m).
+    pub shift: f64,
+    /// How often `shift` has been brought back into its range (each time the image codes
+    /// of the neighbour list change meaning, so the list must be rebuilt).
+    pub wraps: u64,
+}
+
+/// An axis-aligned box `[lo, hi]` with per-axis periodicity, optionally sheared by
+/// Lees-Edwards boundaries.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Domain {
     /// Lower corner (m).
@@ -84,9 +99,69 @@ pub struct Domain {
     pub hi: DVec3,
     /// Which of `x`, `y`, `z` are periodic.
     pub periodic: [bool; 3],
+    /// Lees-Edwards shear in `x`–`y`, if any (needs `x` and `y` periodic).
+    pub lees_edwards: Option<LeesEdwards>,
+    /// Accumulated deformation gradient of the box's affine motion (shear, rescaling) since
+    /// the start; the neighbour list compares it between builds.
+    pub deformation: DMat3,
 }
 
 impl Domain {
+    /// A box `[lo, hi]` with the given periodicity, no shear.
+    pub fn new(lo: DVec3, hi: DVec3, periodic: [bool; 3]) -> Domain {
+        Domain {
+            lo,
+            hi,
+            periodic,
+            lees_edwards: None,
+            deformation: DMat3::IDENTITY,
+        }
+    }
+
+    /// Adds Lees-Edwards shear at rate `shear_rate` (1/s), shift zero.
+    pub fn with_lees_edwards(mut self, shear_rate: f64) -> Domain {
+        self.lees_edwards = Some(LeesEdwards {
+            shear_rate,
+            shift: 0.0,
+            wraps: 0,
+        });
+        self
+    }
+
+    /// Velocity of the mean flow at `r` (m/s): `γ̇ (y − lo_y) x̂` under Lees-Edwards shear,
+    /// zero otherwise.
+    #[inline]
+    pub fn mean_flow(&self, r: DVec3) -> DVec3 {
+        match &self.lees_edwards {
+            Some(le) => DVec3::new(le.shear_rate * (r.y - self.lo.y), 0.0, 0.0),
+            None => DVec3::ZERO,
+        }
+    }
+
+    /// Advances the box's own motion over `dt` (s): the Lees-Edwards shift grows by
+    /// `γ̇ L_y dt` (with the current `L_y`).
+    pub fn advance(&mut self, dt: f64) {
+        let l = self.lengths();
+        if let Some(le) = &mut self.lees_edwards {
+            let strain = le.shear_rate * dt;
+            le.shift += strain * l.y;
+            if le.shift >= 0.5 * l.x || le.shift < -0.5 * l.x {
+                le.shift -= l.x * (le.shift / l.x).round();
+                if le.shift >= 0.5 * l.x {
+                    le.shift -= l.x;
+                }
+                le.wraps += 1;
+            }
+            let mut shear = DMat3::IDENTITY;
+            shear.y_axis.x = strain;
+            self.deformation = shear * self.deformation;
+        }
+    }
+
+    /// How often the image codes have changed meaning (Lees-Edwards shift wraps).
+    pub fn image_epoch(&self) -> u64 {
+        self.lees_edwards.map_or(0, |le| le.wraps)
+    }
     /// Box edge lengths (m).
     #[inline]
     pub fn lengths(&self) -> DVec3 {
@@ -99,36 +174,48 @@ impl Domain {
         l.x * l.y * l.z
     }
 
-    /// The current transformation of every image code.
+    /// The current transformation of every image code. Under Lees-Edwards shear the images
+    /// across `y` are shifted by `c_y s` in `x` and move `c_y γ̇ L_y` faster in `x`.
     pub fn image_transforms(&self) -> [ImageTransform; IMAGE_COUNT] {
         let l = self.lengths();
+        let (s, u) = self
+            .lees_edwards
+            .map_or((0.0, 0.0), |le| (le.shift, le.shear_rate * l.y));
         std::array::from_fn(|code| {
             let c = image_offsets(code as u8);
+            let (cx, cy, cz) = (c[0] as f64, c[1] as f64, c[2] as f64);
             ImageTransform {
                 rotation: None,
-                shift: DVec3::new(c[0] as f64 * l.x, c[1] as f64 * l.y, c[2] as f64 * l.z),
-                velocity_shift: DVec3::ZERO,
+                shift: DVec3::new(cx * l.x + cy * s, cy * l.y, cz * l.z),
+                velocity_shift: DVec3::new(cy * u, 0.0, 0.0),
             }
         })
     }
 
-    /// Largest change of any image's position shift between two sets of transforms (m):
-    /// how much a pair's separation can change through the boundary alone.
-    pub fn image_drift(
-        a: &[ImageTransform; IMAGE_COUNT],
-        b: &[ImageTransform; IMAGE_COUNT],
-    ) -> f64 {
-        a.iter()
-            .zip(b)
-            .map(|(x, y)| (x.shift - y.shift).length())
-            .fold(0.0, f64::max)
-    }
-
-    /// Maps a particle back into the primary box along its periodic axes.
-    pub fn wrap(&self, position: &mut DVec3, _velocity: &mut DVec3) {
+    /// Maps a particle back into the primary box along its periodic axes. Crossing `y`
+    /// under Lees-Edwards shear also shifts `x` by `∓s` and `v_x` by `∓γ̇ L_y`.
+    pub fn wrap(&self, position: &mut DVec3, velocity: &mut DVec3) {
         let l = self.lengths();
+        if let Some(le) = &self.lees_edwards {
+            let mut k = ((position.y - self.lo.y) / l.y).floor();
+            // One more crossing where rounding left y on the boundary.
+            for _ in 0..3 {
+                if k != 0.0 {
+                    position.y -= k * l.y;
+                    position.x -= k * le.shift;
+                    velocity.x -= k * le.shear_rate * l.y;
+                }
+                k = if position.y >= self.hi.y {
+                    1.0
+                } else if position.y < self.lo.y {
+                    -1.0
+                } else {
+                    break;
+                };
+            }
+        }
         for axis in 0..3 {
-            if self.periodic[axis] {
+            if self.periodic[axis] && !(axis == 1 && self.lees_edwards.is_some()) {
                 let x = position[axis];
                 if x < self.lo[axis] || x >= self.hi[axis] {
                     let k = ((x - self.lo[axis]) / l[axis]).floor();
@@ -157,6 +244,10 @@ impl Domain {
             *r = self.lo + (*r - self.lo) * s;
         }
         self.hi = self.lo + self.lengths() * s;
+        if let Some(le) = &mut self.lees_edwards {
+            le.shift *= s.x;
+        }
+        self.deformation = DMat3::from_diagonal(s) * self.deformation;
     }
 }
 
@@ -165,11 +256,7 @@ mod tests {
     use super::*;
 
     fn cube() -> Domain {
-        Domain {
-            lo: DVec3::ZERO,
-            hi: DVec3::splat(2.0),
-            periodic: [true, true, false],
-        }
+        Domain::new(DVec3::ZERO, DVec3::splat(2.0), [true, true, false])
     }
 
     #[test]

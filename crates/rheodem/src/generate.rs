@@ -165,11 +165,7 @@ mod tests {
     #[test]
     fn inserted_spheres_do_not_overlap_across_periodic_faces() {
         let mut rng = Rng::seed_from_u64(9);
-        let d = Domain {
-            lo: DVec3::ZERO,
-            hi: DVec3::splat(10.0),
-            periodic: [true, true, false],
-        };
+        let d = Domain::new(DVec3::ZERO, DVec3::splat(10.0), [true, true, false]);
         let radii = polydisperse_radii(&mut rng, 300, 1.0, 2.0);
         let pos = insert_random(&mut rng, &radii, &d, &[], 1000).expect("loose enough");
         for i in 0..pos.len() {

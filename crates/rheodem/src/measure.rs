@@ -2,6 +2,7 @@
 //! volume fraction, momenta.
 
 use crate::contact::{PairForce, PairKinematics};
+use crate::domain::Domain;
 use crate::particles::Particles;
 use glam::{DMat3, DVec3};
 use serde::{Deserialize, Serialize};
@@ -121,12 +122,14 @@ pub fn kinetic_energies(p: &Particles) -> (f64, f64) {
     (trans, rot)
 }
 
-/// Kinetic stress sum `Σ m v ⊗ v` over free particles (kg m²/s²).
-pub fn kinetic_stress_sum(p: &Particles) -> DMat3 {
+/// Kinetic stress sum `Σ m v' ⊗ v'` over free particles (kg m²/s²), `v'` the velocity
+/// relative to the domain's mean flow.
+pub fn kinetic_stress_sum(p: &Particles, domain: &Domain) -> DMat3 {
     let mut s = DMat3::ZERO;
     for i in 0..p.len() {
         if p.motion[i].is_free() {
-            s += outer(p.velocity[i] * p.mass[i], p.velocity[i]);
+            let v = p.velocity[i] - domain.mean_flow(p.position[i]);
+            s += outer(v * p.mass[i], v);
         }
     }
     s

@@ -90,6 +90,7 @@ impl Simulation {
     pub fn begin_step(&mut self) {
         kick(&mut self.particles, 0.5 * self.dt);
         drift(&mut self.particles, self.dt);
+        self.domain.advance(self.dt);
         self.time += self.dt;
         self.step += 1;
     }
@@ -101,8 +102,7 @@ impl Simulation {
 
     /// Rebuilds the neighbour list if particles or images have moved far enough.
     pub fn refresh_neighbors(&mut self) -> Result<(), NeighborError> {
-        let images = self.domain.image_transforms();
-        if self.neighbors.needs_rebuild(&self.particles, &images) {
+        if self.neighbors.needs_rebuild(&self.particles, &self.domain) {
             self.neighbors.build(&mut self.particles, &self.domain)?;
         }
         Ok(())
@@ -152,7 +152,7 @@ impl Simulation {
         let (kt, kr) = kinetic_energies(p);
         let sums = &self.measured.1;
         let volume = self.domain.volume();
-        let stress = (kinetic_stress_sum(p) + sums.stress_sum) / volume;
+        let stress = (kinetic_stress_sum(p, &self.domain) + sums.stress_sum) / volume;
         let free = p.free_count().max(1) as f64;
         Observables {
             time: self.time,

@@ -494,11 +494,7 @@ pub fn build(s: &Scenario, base_dir: &Path) -> Result<Built, ScenarioError> {
     for (a, &l) in size.iter().enumerate() {
         positive(&format!("domain.size[{a}]"), l)?;
     }
-    let domain = Domain {
-        lo,
-        hi: lo + DVec3::from_array(size),
-        periodic: s.domain.periodic,
-    };
+    let domain = Domain::new(lo, lo + DVec3::from_array(size), s.domain.periodic);
 
     let mut particles = Particles::default();
     let mut distribution = Vec::new();

@@ -57,11 +57,7 @@ pub fn frictional_law(e: f64, mu: f64) -> ContactLaw {
 
 /// A large non-periodic box.
 pub fn open_box(half: f64) -> Domain {
-    Domain {
-        lo: DVec3::splat(-half),
-        hi: DVec3::splat(half),
-        periodic: [false; 3],
-    }
+    Domain::new(DVec3::splat(-half), DVec3::splat(half), [false; 3])
 }
 
 /// Builds a simulation of the given spheres with one law for everything.
@@ -191,11 +187,7 @@ pub fn fcc_packing(
             }
         }
     }
-    let domain = Domain {
-        lo: DVec3::ZERO,
-        hi: DVec3::splat(edge),
-        periodic: [true; 3],
-    };
+    let domain = Domain::new(DVec3::ZERO, DVec3::splat(edge), [true; 3]);
     (spheres, domain)
 }
 
