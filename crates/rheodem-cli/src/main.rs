@@ -72,6 +72,9 @@ enum Command {
         /// Timed steps.
         #[arg(long, default_value_t = 3000)]
         steps: u64,
+        /// Verlet skin (model units; the LAMMPS input uses 0.2).
+        #[arg(long, default_value_t = rheodem::bench::DEFAULT_SKIN)]
+        skin: f64,
         /// Cohesion variants to measure (default: all three).
         #[arg(long, value_enum, value_delimiter = ',')]
         cohesion: Vec<BenchCohesionArg>,
@@ -209,8 +212,12 @@ fn run(cli: Cli) -> Result<()> {
             threads,
             warmup,
             steps,
+            skin,
             cohesion,
         } => {
+            if !(skin.is_finite() && skin > 0.0) {
+                bail!("--skin = {skin}: must be a positive number");
+            }
             let all = std::thread::available_parallelism().map_or(1, |n| n.get());
             let counts = if threads.is_empty() {
                 if all > 1 { vec![1, all] } else { vec![1] }
@@ -240,7 +247,7 @@ fn run(cli: Cli) -> Result<()> {
                 for &n in &counts {
                     let (pool, n) = pool(Some(n))?;
                     let r = pool.install(|| {
-                        let mut sim = rheodem::bench::standard_problem(1.0, cohesion);
+                        let mut sim = rheodem::bench::standard_problem(1.0, cohesion, skin);
                         rheodem::bench::run_timed(&mut sim, warmup, steps)
                     });
                     let total = r.loop_time.as_secs_f64();

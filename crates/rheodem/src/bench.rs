@@ -80,9 +80,12 @@ impl BenchCohesion {
     }
 }
 
+/// Verlet skin of the standard problem (model units), as in the LAMMPS input.
+pub const DEFAULT_SKIN: f64 = 0.2;
+
 /// Builds the standard problem sheared at `shear_rate` (model units) with the given
-/// cohesion.
-pub fn standard_problem(shear_rate: f64, cohesion: BenchCohesion) -> Simulation {
+/// cohesion and Verlet skin (model units).
+pub fn standard_problem(shear_rate: f64, cohesion: BenchCohesion, skin: f64) -> Simulation {
     let packing = parse_packing(PACKING).expect("the shipped packing is valid");
     let edge = packing
         .box_edge
@@ -116,7 +119,7 @@ pub fn standard_problem(shear_rate: f64, cohesion: BenchCohesion) -> Simulation 
         Vec::new(),
         DVec3::ZERO,
         3.2e-4,
-        0.2,
+        skin,
     )
     .expect("the standard problem's box is large enough")
 }

@@ -168,6 +168,7 @@ fn chunk_forces<const MEASURE: bool>(
                 continue;
             }
             let dist = d2.sqrt();
+            let inv_dist = 1.0 / dist;
             let (v_j, w_j) = if code == IDENTITY_IMAGE {
                 (inp.velocity[j], inp.omega[j])
             } else {
@@ -177,7 +178,7 @@ fn chunk_forces<const MEASURE: bool>(
                 )
             };
             let kin = PairKinematics {
-                normal: branch / dist,
+                normal: branch * inv_dist,
                 overlap: sum - dist,
                 radius_i: a_i,
                 radius_j: inp.radius[j],
