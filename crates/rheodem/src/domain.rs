@@ -232,6 +232,17 @@ impl Domain {
         }
     }
 
+    /// Scales the box along `y` about its lower corner by `factor`, with the `y` coordinates
+    /// and `y` velocities (the mean flow has no `y` component).
+    pub fn scale_y(&mut self, factor: f64, positions: &mut [DVec3], velocities: &mut [DVec3]) {
+        for (r, v) in positions.iter_mut().zip(velocities.iter_mut()) {
+            r.y = self.lo.y + (r.y - self.lo.y) * factor;
+            v.y *= factor;
+        }
+        self.hi.y = self.lo.y + (self.hi.y - self.lo.y) * factor;
+        self.deformation = DMat3::from_diagonal(DVec3::new(1.0, factor, 1.0)) * self.deformation;
+    }
+
     /// Scales the box about its lower corner by `factor` along every periodic axis and maps
     /// positions affinely with it (used to compress a packing).
     pub fn scale_affine(&mut self, factor: f64, positions: &mut [DVec3]) {

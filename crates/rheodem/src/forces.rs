@@ -11,7 +11,14 @@
 
 use crate::contact::{ContactHistory, ContactTable, PairKinematics};
 use crate::domain::{IDENTITY_IMAGE, IMAGE_COUNT, ImageTransform};
-use crate::measure::ContactSums;
+use crate::measure::{ContactSums, outer};
+
+/// Measurement level: forces only.
+pub const MEASURE_NONE: u8 = 0;
+/// Measurement level: forces and the contact stress sum.
+pub const MEASURE_STRESS: u8 = 1;
+/// Measurement level: forces and every contact observable (stress, energy, counts).
+pub const MEASURE_ALL: u8 = 2;
 use crate::neighbor::NeighborList;
 use crate::particles::Particles;
 use glam::DVec3;
@@ -42,8 +49,9 @@ struct Inputs<'a> {
 }
 
 /// Zeroes the particle forces and torques and adds every pair force of the list, advancing
-/// contact history over `dt` (s). With `MEASURE`, also returns the pair observables.
-pub fn pair_forces<const MEASURE: bool>(
+/// contact history over `dt` (s). With `LEVEL` = [`MEASURE_STRESS`] it also sums the contact
+/// stress; with [`MEASURE_ALL`] every contact observable.
+pub fn pair_forces<const LEVEL: u8>(
     particles: &mut Particles,
     list: &mut NeighborList,
     laws: &ContactTable,
@@ -101,7 +109,7 @@ pub fn pair_forces<const MEASURE: bool>(
     let partial: Vec<ContactSums> = jobs
         .into_par_iter()
         .map(|(range, active, history, force, torque)| {
-            chunk_forces::<MEASURE>(&inputs, range, active, history, force, torque)
+            chunk_forces::<LEVEL>(&inputs, range, active, history, force, torque)
         })
         .collect();
 
@@ -131,7 +139,7 @@ pub fn pair_forces<const MEASURE: bool>(
 
 /// Forces of the pairs whose first slot lies in `range`.
 #[inline(never)]
-fn chunk_forces<const MEASURE: bool>(
+fn chunk_forces<const LEVEL: u8>(
     inp: &Inputs<'_>,
     range: std::ops::Range<usize>,
     active: &mut [bool],
@@ -198,13 +206,15 @@ fn chunk_forces<const MEASURE: bool>(
             t_i += pf.torque_i;
             force[j] -= pf.force;
             torque[j] += pf.torque_j;
-            if MEASURE {
+            if LEVEL == MEASURE_ALL {
                 obs.add_pair(
                     &pf,
                     &kin,
                     law.elastic_energy(kin.overlap, a_i, kin.radius_j, h),
                     branch,
                 );
+            } else if LEVEL == MEASURE_STRESS {
+                obs.stress_sum += outer(pf.force, branch);
             }
         }
         force[i] += f_i;

@@ -18,6 +18,7 @@ pub mod plot;
 pub mod run;
 pub mod scenario;
 pub mod simulation;
+pub mod stress_control;
 pub mod timestep;
 pub mod walls;
 

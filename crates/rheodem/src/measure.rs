@@ -93,6 +93,10 @@ pub struct Observables {
     pub bridges_per_particle: f64,
     /// Volume fraction of the free particles in the box.
     pub volume_fraction: f64,
+    /// Box edge lengths (m).
+    pub box_size: [f64; 3],
+    /// Granular temperature `T_g = (1/3N) Σ |v − u(r)|²` (m²/s²), `u` the mean flow.
+    pub granular_temperature: f64,
     /// Stress tensor `σ = (Σ m v'⊗v' + Σ f⊗l) / V` (Pa), compression positive, row-major.
     pub stress: [[f64; 3]; 3],
 }
@@ -133,6 +137,18 @@ pub fn kinetic_stress_sum(p: &Particles, domain: &Domain) -> DMat3 {
         }
     }
     s
+}
+
+/// Granular temperature `(1/3N) Σ |v_i − u(r_i)|²` over the free particles (m²/s²).
+pub fn granular_temperature(p: &Particles, domain: &Domain) -> f64 {
+    let (mut sum, mut n) = (0.0, 0usize);
+    for i in 0..p.len() {
+        if p.motion[i].is_free() {
+            sum += (p.velocity[i] - domain.mean_flow(p.position[i])).length_squared();
+            n += 1;
+        }
+    }
+    if n > 0 { sum / (3.0 * n as f64) } else { 0.0 }
 }
 
 /// Total linear momentum of the free particles (kg m/s).

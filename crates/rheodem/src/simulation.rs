@@ -6,11 +6,14 @@
 
 use crate::contact::ContactTable;
 use crate::domain::Domain;
-use crate::forces::{ForceScratch, pair_forces};
+use crate::forces::{ForceScratch, MEASURE_ALL, MEASURE_NONE, MEASURE_STRESS, pair_forces};
 use crate::integrate::{add_gravity, drift, kick};
-use crate::measure::{ContactSums, Observables, kinetic_energies, kinetic_stress_sum, to_rows};
+use crate::measure::{
+    ContactSums, Observables, granular_temperature, kinetic_energies, kinetic_stress_sum, to_rows,
+};
 use crate::neighbor::{NeighborError, NeighborList};
 use crate::particles::Particles;
+use crate::stress_control::StressControl;
 use crate::walls::PlaneWall;
 use glam::DVec3;
 use serde::{Deserialize, Serialize};
@@ -36,6 +39,10 @@ pub struct Simulation {
     pub time: f64,
     /// Steps taken.
     pub step: u64,
+    /// Control of `σ_yy` through `L_y`, if any (Lees-Edwards shear box).
+    pub stress_control: Option<StressControl>,
+    /// `σ_yy` (Pa) of the last force evaluation under stress control.
+    pub sigma_yy: f64,
     /// Contact sums of the last measuring force evaluation and its step.
     measured: (u64, ContactSums),
     #[serde(skip)]
@@ -66,6 +73,8 @@ impl Simulation {
             dt,
             time: 0.0,
             step: 0,
+            stress_control: None,
+            sigma_yy: 0.0,
             measured: (0, ContactSums::default()),
             scratch: ForceScratch::default(),
         };
@@ -91,6 +100,14 @@ impl Simulation {
         kick(&mut self.particles, 0.5 * self.dt);
         drift(&mut self.particles, self.dt);
         self.domain.advance(self.dt);
+        if let Some(control) = &self.stress_control {
+            control.apply(
+                self.sigma_yy,
+                self.dt,
+                &mut self.domain,
+                &mut self.particles,
+            );
+        }
         self.time += self.dt;
         self.step += 1;
     }
@@ -108,27 +125,24 @@ impl Simulation {
         Ok(())
     }
 
-    /// Evaluates all forces and torques at the current positions and velocities.
+    /// Evaluates all forces and torques at the current positions and velocities, with
+    /// every contact observable when `measure` (the contact stress alone is always summed
+    /// under stress control, which needs `σ_yy` every step).
     pub fn compute_forces(&mut self, measure: bool) {
         let images = self.domain.image_transforms();
+        let (p, nb, laws, dt, scratch) = (
+            &mut self.particles,
+            &mut self.neighbors,
+            &self.laws,
+            self.dt,
+            &mut self.scratch,
+        );
         let mut sums = if measure {
-            pair_forces::<true>(
-                &mut self.particles,
-                &mut self.neighbors,
-                &self.laws,
-                &images,
-                self.dt,
-                &mut self.scratch,
-            )
+            pair_forces::<MEASURE_ALL>(p, nb, laws, &images, dt, scratch)
+        } else if self.stress_control.is_some() {
+            pair_forces::<MEASURE_STRESS>(p, nb, laws, &images, dt, scratch)
         } else {
-            pair_forces::<false>(
-                &mut self.particles,
-                &mut self.neighbors,
-                &self.laws,
-                &images,
-                self.dt,
-                &mut self.scratch,
-            )
+            pair_forces::<MEASURE_NONE>(p, nb, laws, &images, dt, scratch)
         };
         for wall in &mut self.walls {
             let w = wall.apply(&mut self.particles, &self.laws, self.dt);
@@ -138,6 +152,19 @@ impl Simulation {
         if measure {
             self.measured = (self.step, sums);
         }
+        if self.stress_control.is_some() {
+            let kinetic = kinetic_stress_sum(&self.particles, &self.domain);
+            self.sigma_yy = (kinetic.y_axis.y + sums.stress_sum.y_axis.y) / self.domain.volume();
+        }
+    }
+
+    /// Switches on control of `σ_yy` (Lees-Edwards box), starting from the stress of the
+    /// last full measurement.
+    pub fn set_stress_control(&mut self, control: StressControl) {
+        let kinetic = kinetic_stress_sum(&self.particles, &self.domain);
+        self.sigma_yy =
+            (kinetic.y_axis.y + self.measured.1.stress_sum.y_axis.y) / self.domain.volume();
+        self.stress_control = Some(control);
     }
 
     /// Step at which the contact sums of [`Simulation::observables`] were gathered.
@@ -169,6 +196,8 @@ impl Simulation {
             coordination: 2.0 * sums.contacts as f64 / free,
             bridges_per_particle: sums.attracting_apart as f64 / free,
             volume_fraction: p.free_volume() / volume,
+            box_size: self.domain.lengths().to_array(),
+            granular_temperature: granular_temperature(p, &self.domain),
             stress: to_rows(stress),
         }
     }

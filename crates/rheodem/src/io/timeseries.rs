@@ -4,7 +4,7 @@ use crate::measure::Observables;
 use std::fmt::Write;
 
 /// Column names of the CSV, in order. Units: s, J, Pa.
-pub const COLUMNS: [&str; 21] = [
+pub const COLUMNS: [&str; 26] = [
     "time",
     "step",
     "kinetic_translational",
@@ -26,9 +26,14 @@ pub const COLUMNS: [&str; 21] = [
     "stress_zy",
     "stress_zz",
     "mu_xy_yy",
+    "box_x",
+    "box_y",
+    "box_z",
+    "granular_temperature",
+    "bridges_per_particle",
 ];
 
-/// Renders the rows as CSV with a header line. The last column is `|σ_xy| / σ_yy`.
+/// Renders the rows as CSV with a header line; `mu_xy_yy` is `|σ_xy| / σ_yy`.
 pub fn to_csv(rows: &[Observables]) -> String {
     let mut out = COLUMNS.join(",");
     out.push('\n');
@@ -59,7 +64,15 @@ pub fn to_csv(rows: &[Observables]) -> String {
                 let _ = write!(out, ",{v:e}");
             }
         }
-        let _ = writeln!(out, ",{mu:e}");
+        let _ = writeln!(
+            out,
+            ",{mu:e},{:e},{:e},{:e},{:e},{:e}",
+            o.box_size[0],
+            o.box_size[1],
+            o.box_size[2],
+            o.granular_temperature,
+            o.bridges_per_particle
+        );
     }
     out
 }
