@@ -1,6 +1,7 @@
 //! The `rheodem` command-line program: run a scenario, resume a run, benchmark the engine.
 
 mod contact;
+mod shear;
 
 use anyhow::{Context, Result, bail};
 use clap::{Parser, Subcommand};
@@ -50,6 +51,19 @@ enum Command {
         #[arg(long, short)]
         threads: Option<usize>,
         /// No progress bar.
+        #[arg(long, short)]
+        quiet: bool,
+    },
+    /// Stress-controlled simple shear box at given (μ_p, I, p*, Bo): steady-state φ, μ, Z, σ.
+    ShearBox(shear::ShearBoxArgs),
+    /// Run a list or grid of shear-box points (resumable), collecting one results table.
+    Sweep {
+        /// The sweep file (TOML).
+        file: PathBuf,
+        /// Points run at once (one thread each; default: all cores).
+        #[arg(long, short)]
+        jobs: Option<usize>,
+        /// Less output.
         #[arg(long, short)]
         quiet: bool,
     },
@@ -201,6 +215,8 @@ fn run(cli: Cli) -> Result<()> {
             advance(&pool, &mut r, &dir, quiet)
         }
         Command::Contact(cmd) => contact::run(cmd),
+        Command::ShearBox(args) => shear::shear_box(args),
+        Command::Sweep { file, jobs, quiet } => shear::sweep(&file, jobs, quiet),
         Command::Check { scenario } => {
             let sc = Scenario::from_file(&scenario)?;
             let base = scenario.parent().unwrap_or(Path::new("."));

@@ -4,6 +4,7 @@
 //! frictional contacts, and the rheology tools built on it. All quantities are SI unless a
 //! doc comment says otherwise.
 
+pub mod analysis;
 pub mod bench;
 pub mod contact;
 pub mod domain;
@@ -17,6 +18,7 @@ pub mod particles;
 pub mod plot;
 pub mod run;
 pub mod scenario;
+pub mod setups;
 pub mod simulation;
 pub mod stress_control;
 pub mod timestep;

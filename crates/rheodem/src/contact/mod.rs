@@ -120,7 +120,7 @@ impl ContactLaw {
         h: &mut ContactHistory,
         dt: f64,
     ) -> Option<PairForce> {
-        if k.overlap > 0.0 {
+        if k.overlap >= 0.0 {
             return Some(self.evaluate(k, h, dt));
         }
         // Apart: the springs relax; only the adhesive law (and its bridge) may act.

@@ -13,6 +13,7 @@ use crate::io::packing::parse_packing;
 use crate::neighbor::NeighborError;
 use crate::particles::{Motion, Particles, Sphere};
 use crate::timestep::{DEFAULT_FRACTION, MAX_FRACTION, shortest_contact_time};
+use crate::stress_control::StressControl;
 use crate::walls::PlaneWall;
 use glam::DVec3;
 use rand::SeedableRng;
@@ -872,6 +873,33 @@ pub fn build(s: &Scenario, base_dir: &Path) -> Result<Built, ScenarioError> {
             })?,
         ),
     };
+    if let Some(rate) = s.domain.shear_rate {
+        if !rate.is_finite() {
+            return Err(invalid("domain.shear_rate", rate, "must be finite (1/s)"));
+        }
+        if !(s.domain.periodic[0] && s.domain.periodic[1]) {
+            return Err(invalid("domain.shear_rate", rate, "Lees-Edwards shear needs periodic x and y"));
+        }
+        simulation.domain = simulation.domain.clone().with_lees_edwards(rate);
+        let p = &mut simulation.particles;
+        for i in 0..p.len() {
+            if p.motion[i].is_free() {
+                p.velocity[i].x += rate * (p.position[i].y - simulation.domain.lo.y);
+            }
+        }
+        // The list stays valid: the shift starts at zero, so images keep their meaning.
+    }
+    if let Some(c) = &s.stress_control {
+        if s.domain.shear_rate.is_none() {
+            return Err(invalid("stress_control", "(table)", "needs domain.shear_rate (a Lees-Edwards box)"));
+        }
+        simulation.set_stress_control(StressControl {
+            target: positive("stress_control.target", c.target)?,
+            modulus: positive("stress_control.modulus", c.modulus)?,
+            time: positive("stress_control.time", c.time)?,
+            max_strain_per_step: 1e-4,
+        });
+    }
     let obs = simulation.observables();
     let resolved = Resolved {
         version: crate::VERSION.to_string(),

@@ -38,7 +38,7 @@ pub enum ScenarioError {
 }
 
 /// Shorthand for an [`ScenarioError::Invalid`].
-pub(crate) fn invalid(
+pub fn invalid(
     key: impl Into<String>,
     value: impl ToString,
     allowed: impl Into<String>,

@@ -62,6 +62,21 @@ pub struct Scenario {
     /// Neighbour-list settings.
     #[serde(default)]
     pub neighbor: NeighborSpec,
+    /// Control of `σ_yy` through `L_y` (needs `domain.shear_rate`).
+    #[serde(default)]
+    pub stress_control: Option<StressControlSpec>,
+}
+
+/// Proportional control of `σ_yy` (PHYSICS §3): `L̇_y/L_y = (σ_yy − target)/(modulus · time)`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct StressControlSpec {
+    /// Target `σ_yy` (Pa), positive.
+    pub target: f64,
+    /// Contact modulus `k_n / d_p` (Pa).
+    pub modulus: f64,
+    /// Relaxation time `τ` (s).
+    pub time: f64,
 }
 
 fn default_seed() -> u64 {
@@ -81,6 +96,11 @@ pub struct DomainSpec {
     /// Periodicity of `x`, `y`, `z`.
     #[serde(default)]
     pub periodic: [bool; 3],
+    /// Lees-Edwards shear rate `γ̇` (1/s): shear along `x`, gradient `y`, switched on after
+    /// the preparation with the affine profile `v_x += γ̇ (y − lo_y)` (needs `x`, `y`
+    /// periodic).
+    #[serde(default)]
+    pub shear_rate: Option<f64>,
 }
 
 /// A material.

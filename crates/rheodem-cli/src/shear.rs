@@ -1,0 +1,230 @@
+//! `rheodem shear-box` and `rheodem sweep`.
+
+use anyhow::{Context, Result, bail};
+use clap::Args;
+use indicatif::{ProgressBar, ProgressStyle};
+use rheodem::io::atomic::write_atomic;
+use rheodem::setups::shear_box::ShearBoxSpec;
+use rheodem::setups::sweep::{PointResult, SweepSpec, default_out, expand, results_csv, run_point};
+use std::path::{Path, PathBuf};
+use std::sync::Mutex;
+use std::sync::atomic::{AtomicUsize, Ordering};
+
+/// Arguments of `shear-box`: every option overrides the same key of `--config`.
+#[derive(Args)]
+pub struct ShearBoxArgs {
+    /// A TOML file with the point's keys (mu_p, inertial, softness, bond, cohesion, …).
+    #[arg(long)]
+    config: Option<PathBuf>,
+    /// Particle friction μ_p.
+    #[arg(long)]
+    mu_p: Option<f64>,
+    /// Inertial number I.
+    #[arg(long)]
+    inertial: Option<f64>,
+    /// Softness p*.
+    #[arg(long)]
+    softness: Option<f64>,
+    /// Bond number Bo.
+    #[arg(long)]
+    bond: Option<f64>,
+    /// Cohesion law: none, reversible, liquid_bridge, linear_irreversible.
+    #[arg(long)]
+    cohesion: Option<String>,
+    /// Rupture distance of the irreversible laws, S_c/d_p.
+    #[arg(long)]
+    range: Option<f64>,
+    /// Mean diameter d_p (m).
+    #[arg(long)]
+    diameter: Option<f64>,
+    /// Density ρ_p (kg/m³).
+    #[arg(long)]
+    density: Option<f64>,
+    /// Normal stiffness k_n (N/m).
+    #[arg(long)]
+    stiffness: Option<f64>,
+    /// Restitution coefficient e.
+    #[arg(long)]
+    restitution: Option<f64>,
+    /// Polydispersity w = r_max/r_min.
+    #[arg(long)]
+    polydispersity: Option<f64>,
+    /// Number of particles N.
+    #[arg(long)]
+    particles: Option<usize>,
+    /// Total shear strain.
+    #[arg(long)]
+    strain: Option<f64>,
+    /// Strain before averaging.
+    #[arg(long)]
+    transient_strain: Option<f64>,
+    /// Seed.
+    #[arg(long)]
+    seed: Option<u64>,
+    /// Run directory (default: runs/shear-box).
+    #[arg(long, short)]
+    out: Option<PathBuf>,
+    /// Worker threads.
+    #[arg(long, short)]
+    threads: Option<usize>,
+    /// No progress bar.
+    #[arg(long, short)]
+    quiet: bool,
+}
+
+fn spec_from(a: &ShearBoxArgs) -> Result<ShearBoxSpec> {
+    let mut table: toml::Table = match &a.config {
+        Some(path) => {
+            let text = std::fs::read_to_string(path).with_context(|| format!("cannot read {}", path.display()))?;
+            toml::from_str(&text).with_context(|| format!("{} is not valid TOML", path.display()))?
+        }
+        None => toml::Table::new(),
+    };
+    let mut set = |k: &str, v: Option<toml::Value>| {
+        if let Some(v) = v {
+            table.insert(k.to_string(), v);
+        }
+    };
+    let f = |x: Option<f64>| x.map(toml::Value::Float);
+    set("mu_p", f(a.mu_p));
+    set("inertial", f(a.inertial));
+    set("softness", f(a.softness));
+    set("bond", f(a.bond));
+    set("cohesion", a.cohesion.clone().map(toml::Value::String));
+    set("range", f(a.range));
+    set("diameter", f(a.diameter));
+    set("density", f(a.density));
+    set("stiffness", f(a.stiffness));
+    set("restitution", f(a.restitution));
+    set("polydispersity", f(a.polydispersity));
+    set("particles", a.particles.map(|n| toml::Value::Integer(n as i64)));
+    set("strain", f(a.strain));
+    set("transient_strain", f(a.transient_strain));
+    set("seed", a.seed.map(|n| toml::Value::Integer(n as i64)));
+    let text = toml::to_string(&table).unwrap_or_default();
+    let spec: ShearBoxSpec = toml::from_str(&text).map_err(|e| anyhow::anyhow!("shear-box point: {e}"))?;
+    spec.derive()?;
+    Ok(spec)
+}
+
+fn bar(total: u64, quiet: bool, prefix: String) -> ProgressBar {
+    let bar = if quiet { ProgressBar::hidden() } else { ProgressBar::new(total) };
+    bar.set_style(
+        ProgressStyle::with_template("{prefix} {bar:30} {percent:>3}%  ETA {eta}").unwrap_or_else(|_| ProgressStyle::default_bar()),
+    );
+    bar.set_prefix(prefix);
+    bar
+}
+
+/// Runs `shear-box`.
+pub fn shear_box(a: ShearBoxArgs) -> Result<()> {
+    let spec = spec_from(&a)?;
+    let dv = spec.derive()?;
+    let dir = a.out.clone().unwrap_or_else(|| PathBuf::from("runs/shear-box"));
+    let n = a.threads.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
+    if n == 0 {
+        bail!("--threads must be at least 1");
+    }
+    let pool = rayon::ThreadPoolBuilder::new().num_threads(n).build()?;
+    if !a.quiet {
+        eprintln!(
+            "resolved: p = σ_yy target = {:.6e} Pa, γ̇ = {:.6e} 1/s, f_a^max = {:.6e} N, S_c = {:.4e} m, t_k = {:.4e} s, run {:.4e} s ({} strain)",
+            dv.pressure, dv.shear_rate, dv.max_force, dv.rupture_distance, dv.stiffness_time, dv.duration, spec.strain
+        );
+    }
+    let progress = bar(1000, a.quiet, "shear".into());
+    let name = dir.file_name().map_or("shear-box".into(), |s| s.to_string_lossy().into_owned());
+    let result = pool.install(|| {
+        run_point(&name, &spec, &dir, n, &mut |done, total| {
+            if done % 256 == 0 {
+                progress.set_position(done * 1000 / total.max(1));
+            }
+        })
+    })?;
+    progress.finish_and_clear();
+    report(&result, &dir);
+    Ok(())
+}
+
+fn report(r: &PointResult, dir: &Path) {
+    match &r.steady_state {
+        Some(ss) => {
+            println!(
+                "steady state over strain {:.1}–{:.1}: φ = {:.5} ± {:.5}, μ = {:.4} ± {:.4}, Z = {:.3} ± {:.3}, σ_yy = {:.5e} ± {:.1e} Pa (target {:.5e}), P = tr σ/3 = {:.5e} Pa",
+                ss.strain_window[0], ss.strain_window[1], ss.volume_fraction.mean, ss.volume_fraction.error, ss.friction.mean,
+                ss.friction.error, ss.coordination.mean, ss.coordination.error, ss.sigma_yy.mean, ss.sigma_yy.error,
+                r.derived.pressure, ss.mean_stress.mean
+            );
+            if !ss.steady {
+                eprintln!("warning: {} did NOT reach a steady state: {}", dir.display(), ss.note);
+            }
+        }
+        None => eprintln!("warning: {}: too few time-series rows past the transient to average", dir.display()),
+    }
+    println!("outputs in {}", dir.display());
+}
+
+/// Runs `sweep`: `jobs` points at once, one thread each.
+pub fn sweep(path: &Path, jobs: Option<usize>, quiet: bool) -> Result<()> {
+    let text = std::fs::read_to_string(path).with_context(|| format!("cannot read {}", path.display()))?;
+    let spec: SweepSpec = toml::from_str(&text).map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
+    let points = expand(&spec)?;
+    let out = spec.out.as_ref().map_or_else(|| default_out(path), PathBuf::from);
+    std::fs::create_dir_all(&out).with_context(|| format!("cannot create {}", out.display()))?;
+    let jobs = jobs.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get())).max(1);
+    eprintln!("{} points, {} at a time → {}", points.len(), jobs, out.display());
+    let next = AtomicUsize::new(0);
+    let results: Mutex<Vec<Option<PointResult>>> = Mutex::new(vec![None; points.len()]);
+    let errors: Mutex<Vec<String>> = Mutex::new(Vec::new());
+    let table = out.join("results.csv");
+    std::thread::scope(|s| {
+        for _ in 0..jobs.min(points.len()) {
+            s.spawn(|| {
+                let pool = match rayon::ThreadPoolBuilder::new().num_threads(1).build() {
+                    Ok(p) => p,
+                    Err(e) => {
+                        errors.lock().map(|mut v| v.push(e.to_string())).ok();
+                        return;
+                    }
+                };
+                loop {
+                    let k = next.fetch_add(1, Ordering::SeqCst);
+                    let Some((name, point)) = points.get(k) else { break };
+                    let dir = out.join(name);
+                    let mut last = 0u64;
+                    let outcome = pool.install(|| {
+                        run_point(name, point, &dir, 1, &mut |done, total| {
+                            let pct = done * 100 / total.max(1);
+                            if !quiet && pct >= last + 10 {
+                                last = pct;
+                                eprintln!("  {name}: {pct} %");
+                            }
+                        })
+                    });
+                    match outcome {
+                        Ok(r) => {
+                            if !quiet {
+                                report(&r, &dir);
+                            }
+                            if let Ok(mut all) = results.lock() {
+                                all[k] = Some(r);
+                                let done: Vec<PointResult> = all.iter().flatten().cloned().collect();
+                                let _ = write_atomic(&table, results_csv(&done).as_bytes());
+                            }
+                        }
+                        Err(e) => {
+                            errors.lock().map(|mut v| v.push(format!("{name}: {e}"))).ok();
+                        }
+                    }
+                }
+            });
+        }
+    });
+    let errors = errors.into_inner().unwrap_or_default();
+    let done = results.into_inner().unwrap_or_default().into_iter().flatten().count();
+    println!("{done} of {} points finished; table in {}", points.len(), table.display());
+    if !errors.is_empty() {
+        bail!("{} points failed:\n{}", errors.len(), errors.join("\n"));
+    }
+    Ok(())
+}

@@ -1,0 +1,4 @@
+//! Builders of the standard set-ups.
+
+pub mod shear_box;
+pub mod sweep;

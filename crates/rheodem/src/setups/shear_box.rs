@@ -1,0 +1,389 @@
+//! The stress-controlled simple shear box, the "rheometer" (PHYSICS §3, seed 000 Sect.
+//! 2.1.1): N polydisperse spheres in a Lees-Edwards box sheared at `γ̇` along `x` with
+//! gradient `y`, `σ_yy` held at `p` by letting `L_y` breathe.
+//!
+//! The user gives the dimensionless controls (PHYSICS §6) — `μ_p`, `I`, `p*`, `Bo`, the
+//! cohesion law — and optionally the material; this module derives `p = p* k_n / d_p`,
+//! `γ̇ = I sqrt(p/ρ_p) / d_p`, `f_a^max = Bo p d_p²` and writes an ordinary
+//! [`Scenario`] (so runs, checkpoints and outputs are those of any scenario).
+//!
+//! Preparation: the particles are inserted at random at φ ≈ 0.3 in a cubic periodic box,
+//! compressed isotropically (frictionless, non-cohesive) until the mean stress reaches `p`,
+//! relaxed for 50 contact times with the full contact law, then sheared from the affine
+//! profile `v_x = γ̇ (y − lo_y)` under σ_yy control.
+
+use crate::analysis::{Estimate, block_average, halves_agree};
+use crate::measure::Observables;
+use crate::scenario::spec::*;
+use crate::scenario::{ScenarioError, invalid};
+use serde::{Deserialize, Serialize};
+use std::f64::consts::PI;
+
+/// The adhesive law of the shear box.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Cohesion {
+    /// Dry, non-cohesive.
+    #[default]
+    None,
+    /// Reversible linear adhesion with `k_c^a = k_n`.
+    Reversible,
+    /// Willett liquid bridges, `θ = 20°`, rupture distance `range · d_p`; `f_a^max` of the
+    /// mean pair (`r = d_p/2`) is `Bo p d_p²`.
+    LiquidBridge,
+    /// Linear irreversible adhesion with rupture distance `range · d_p`.
+    LinearIrreversible,
+}
+
+/// Contact angle of the liquid-bridge option (rad): 20°, as in the seeds.
+const BRIDGE_ANGLE_DEG: f64 = 20.0;
+
+fn default_range() -> f64 {
+    0.225
+}
+fn default_diameter() -> f64 {
+    2.2e-3
+}
+fn default_density() -> f64 {
+    2000.0
+}
+fn default_stiffness() -> f64 {
+    100.0
+}
+fn default_restitution() -> f64 {
+    0.8
+}
+fn default_w() -> f64 {
+    3.0
+}
+fn default_particles() -> usize {
+    4096
+}
+fn default_strain() -> f64 {
+    20.0
+}
+fn default_transient() -> f64 {
+    5.0
+}
+fn default_control() -> f64 {
+    40.0
+}
+fn default_seed() -> u64 {
+    1
+}
+fn default_rows() -> f64 {
+    50.0
+}
+fn default_snapshots() -> u64 {
+    10
+}
+fn default_checkpoints() -> u64 {
+    40
+}
+
+/// A shear-box point: dimensionless controls and material.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ShearBoxSpec {
+    /// Particle friction coefficient `μ_p` (`μ_s = μ_d`), in [0, 10].
+    pub mu_p: f64,
+    /// Inertial number `I = γ̇ d_p / sqrt(p/ρ_p)`, in (0, 2].
+    pub inertial: f64,
+    /// Softness `p* = p d_p / k_n`, in (0, 0.2].
+    pub softness: f64,
+    /// Bond number `Bo = f_a^max / (p d_p²)`, in [0, 100].
+    #[serde(default)]
+    pub bond: f64,
+    /// Adhesive law (ignored when `bond = 0`).
+    #[serde(default)]
+    pub cohesion: Cohesion,
+    /// Rupture distance of the irreversible laws in mean diameters, `S_c / d_p` (default
+    /// 0.225, i.e. 75 nl at 2.2 mm).
+    #[serde(default = "default_range")]
+    pub range: f64,
+    /// Mean diameter `d_p` (m).
+    #[serde(default = "default_diameter")]
+    pub diameter: f64,
+    /// Density `ρ_p` (kg/m³).
+    #[serde(default = "default_density")]
+    pub density: f64,
+    /// Normal stiffness `k_n` (N/m).
+    #[serde(default = "default_stiffness")]
+    pub stiffness: f64,
+    /// Restitution coefficient `e`.
+    #[serde(default = "default_restitution")]
+    pub restitution: f64,
+    /// Polydispersity `w = r_max / r_min`.
+    #[serde(default = "default_w")]
+    pub polydispersity: f64,
+    /// Number of particles.
+    #[serde(default = "default_particles")]
+    pub particles: usize,
+    /// Total shear strain `γ̇ T`.
+    #[serde(default = "default_strain")]
+    pub strain: f64,
+    /// Strain before averaging starts.
+    #[serde(default = "default_transient")]
+    pub transient_strain: f64,
+    /// Relaxation time of the `σ_yy` control in units of `t_k = sqrt(ρ_p d_p³ / k_n)`.
+    #[serde(default = "default_control")]
+    pub control_time: f64,
+    /// Seed.
+    #[serde(default = "default_seed")]
+    pub seed: u64,
+    /// Time-series rows per unit strain.
+    #[serde(default = "default_rows")]
+    pub rows_per_strain: f64,
+    /// VTK snapshots over the run.
+    #[serde(default = "default_snapshots")]
+    pub snapshots: u64,
+    /// Checkpoints over the run.
+    #[serde(default = "default_checkpoints")]
+    pub checkpoints: u64,
+}
+
+/// SI values derived from a [`ShearBoxSpec`].
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Derived {
+    /// Target `σ_yy = p` (Pa).
+    pub pressure: f64,
+    /// Shear rate `γ̇` (1/s).
+    pub shear_rate: f64,
+    /// Maximum adhesive force `f_a^max` (N).
+    pub max_force: f64,
+    /// Rupture distance `S_c` (m) of the irreversible laws.
+    pub rupture_distance: f64,
+    /// `t_k = sqrt(ρ d³/k_n)` (s).
+    pub stiffness_time: f64,
+    /// `t_p = d sqrt(ρ/p)` (s).
+    pub pressure_time: f64,
+    /// Run duration (s).
+    pub duration: f64,
+}
+
+fn in_range(key: &str, v: f64, lo: f64, hi: f64, open_lo: bool) -> Result<f64, ScenarioError> {
+    let ok = v.is_finite() && v <= hi && if open_lo { v > lo } else { v >= lo };
+    if ok {
+        Ok(v)
+    } else {
+        let l = if open_lo { "(" } else { "[" };
+        Err(invalid(key, v, format!("must lie in {l}{lo}, {hi}]")))
+    }
+}
+
+impl ShearBoxSpec {
+    /// Validates the controls and derives the SI values.
+    pub fn derive(&self) -> Result<Derived, ScenarioError> {
+        in_range("mu_p", self.mu_p, 0.0, 10.0, false)?;
+        let i = in_range("inertial", self.inertial, 0.0, 2.0, true)?;
+        let ps = in_range("softness", self.softness, 0.0, 0.2, true)?;
+        let bo = in_range("bond", self.bond, 0.0, 100.0, false)?;
+        let range = in_range("range", self.range, 0.0, 2.0, true)?;
+        let d = in_range("diameter", self.diameter, 0.0, f64::MAX, true)?;
+        let rho = in_range("density", self.density, 0.0, f64::MAX, true)?;
+        let k = in_range("stiffness", self.stiffness, 0.0, f64::MAX, true)?;
+        in_range("restitution", self.restitution, 0.0, 1.0, true)?;
+        in_range("polydispersity", self.polydispersity, 1.0, 20.0, false)?;
+        if self.particles < 16 || self.particles > 10_000_000 {
+            return Err(invalid("particles", self.particles, "must lie in [16, 10000000]"));
+        }
+        let strain = in_range("strain", self.strain, 0.0, 1e6, true)?;
+        if !(self.transient_strain >= 0.0 && self.transient_strain < strain) {
+            return Err(invalid("transient_strain", self.transient_strain, format!("must lie in [0, strain = {strain})")));
+        }
+        in_range("control_time", self.control_time, 0.0, 1e6, true)?;
+        in_range("rows_per_strain", self.rows_per_strain, 0.0, 1e6, true)?;
+        if bo > 0.0 && self.cohesion == Cohesion::None {
+            return Err(invalid("cohesion", "\"none\"", "a positive bond number needs a cohesion law (reversible, liquid_bridge, linear_irreversible)"));
+        }
+        let p = ps * k / d;
+        let shear_rate = i * (p / rho).sqrt() / d;
+        Ok(Derived {
+            pressure: p,
+            shear_rate,
+            max_force: bo * p * d * d,
+            rupture_distance: range * d,
+            stiffness_time: (rho * d.powi(3) / k).sqrt(),
+            pressure_time: d * (rho / p).sqrt(),
+            duration: strain / shear_rate,
+        })
+    }
+
+    /// The scenario that runs this point.
+    pub fn scenario(&self) -> Result<Scenario, ScenarioError> {
+        let dv = self.derive()?;
+        let d = self.diameter;
+        let w = self.polydispersity;
+        // Mean particle volume of radii uniform in [r1, r2].
+        let (r1, r2) = (d / (1.0 + w), w * d / (1.0 + w));
+        let mean_r3 = if r2 > r1 { (r2.powi(4) - r1.powi(4)) / (4.0 * (r2 - r1)) } else { r1.powi(3) };
+        let solid = self.particles as f64 * 4.0 / 3.0 * PI * mean_r3;
+        let edge = (solid / 0.3).cbrt();
+        let adhesion = if self.bond == 0.0 {
+            None
+        } else {
+            Some(match self.cohesion {
+                Cohesion::None => unreachable!("checked in derive"),
+                Cohesion::Reversible => AdhesionSpec::Reversible {
+                    max_force: dv.max_force,
+                    stiffness: Some(self.stiffness),
+                    range: None,
+                },
+                Cohesion::LinearIrreversible => AdhesionSpec::LinearIrreversible {
+                    max_force: dv.max_force,
+                    stiffness: None,
+                    range: Some(dv.rupture_distance),
+                },
+                Cohesion::LiquidBridge => {
+                    let theta = BRIDGE_ANGLE_DEG.to_radians();
+                    AdhesionSpec::LiquidBridge {
+                        surface_tension: dv.max_force / (2.0 * PI * 0.5 * d * theta.cos()),
+                        contact_angle_deg: BRIDGE_ANGLE_DEG,
+                        volume: (dv.rupture_distance / (1.0 + 0.5 * theta)).powi(3),
+                    }
+                }
+            })
+        };
+        let friction = (self.mu_p > 0.0).then(|| ResistanceSpec {
+            stiffness: None,
+            stiffness_ratio: Some(2.0 / 7.0),
+            damping: None,
+            damping_ratio: Some(2.0 / 7.0),
+            damping_per_mass: None,
+            mu: Some(self.mu_p),
+            mu_static: None,
+            mu_dynamic: None,
+        });
+        let rows = (self.rows_per_strain * self.strain).ceil().max(1.0) as u64;
+        Ok(Scenario {
+            title: Some(format!(
+                "shear box: mu_p = {}, I = {}, p* = {}, Bo = {} ({:?}), w = {}, N = {}",
+                self.mu_p, self.inertial, self.softness, self.bond, self.cohesion, w, self.particles
+            )),
+            seed: self.seed,
+            domain: DomainSpec {
+                lo: [0.0; 3],
+                size: Some([edge; 3]),
+                periodic: [true; 3],
+                shear_rate: Some(dv.shear_rate),
+            },
+            species: vec![SpeciesSpec { name: "grain".into(), density: self.density }],
+            contacts: vec![ContactSpec {
+                species: None,
+                normal: NormalSpec {
+                    stiffness: self.stiffness,
+                    restitution: Some(self.restitution),
+                    damping: None,
+                    damping_per_mass: None,
+                },
+                friction,
+                rolling: None,
+                torsion: None,
+                adhesion,
+            }],
+            particles: vec![ParticleGroup::Random {
+                species: "grain".into(),
+                count: self.particles,
+                mean_diameter: d,
+                polydispersity: w,
+                velocity_spread: 0.0,
+            }],
+            walls: Vec::new(),
+            gravity: [0.0; 3],
+            preparation: Some(PreparationSpec {
+                volume_fraction: None,
+                pressure: Some(dv.pressure),
+                strain_per_contact_time: None,
+                relax_contact_times: Some(50.0),
+            }),
+            run: RunSpec { duration: Some(dv.duration), steps: None, dt: None, dt_fraction: None },
+            output: OutputSpec { timeseries_rows: rows, snapshots: self.snapshots, checkpoints: self.checkpoints },
+            neighbor: NeighborSpec::default(),
+            stress_control: Some(StressControlSpec {
+                target: dv.pressure,
+                modulus: self.stiffness / d,
+                time: self.control_time * dv.stiffness_time,
+            }),
+        })
+    }
+}
+
+/// Steady-state averages of a shear-box run.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct SteadyState {
+    /// Whether the averaging window looks stationary (see [`steady_state`]).
+    pub steady: bool,
+    /// Why not, when not.
+    pub note: String,
+    /// Strain window averaged over.
+    pub strain_window: [f64; 2],
+    /// Volume fraction φ.
+    pub volume_fraction: Estimate,
+    /// Macroscopic friction `μ = |σ_xy| / σ_yy`.
+    pub friction: Estimate,
+    /// Coordination number `Z`.
+    pub coordination: Estimate,
+    /// `σ_yy` (Pa).
+    pub sigma_yy: Estimate,
+    /// `|σ_xy|` (Pa).
+    pub shear_stress: Estimate,
+    /// Mean stress `tr σ / 3` (Pa).
+    pub mean_stress: Estimate,
+    /// Granular temperature (m²/s²).
+    pub granular_temperature: Estimate,
+    /// Fraction of sliding contacts.
+    pub sliding_fraction: Estimate,
+    /// Open bridges (attracting pairs apart) per particle.
+    pub bridges_per_particle: Estimate,
+    /// `I` from the measured `σ_yy`.
+    pub inertial_measured: f64,
+    /// `p*` from the measured `σ_yy`.
+    pub softness_measured: f64,
+    /// `Bo` from the measured `σ_yy`.
+    pub bond_measured: f64,
+}
+
+/// Averages the rows past `transient_strain` (the strain of a row is `γ̇ t`). Steady when
+/// at least 2 strain units are averaged and, for both φ and μ, the two halves of the window
+/// agree within three combined standard errors (or within 0.2 % for φ and 2 % for μ).
+pub fn steady_state(rows: &[Observables], spec: &ShearBoxSpec, dv: &Derived) -> Option<SteadyState> {
+    let window: Vec<&Observables> = rows.iter().filter(|o| o.time * dv.shear_rate >= spec.transient_strain).collect();
+    if window.len() < 8 {
+        return None;
+    }
+    let series = |f: &dyn Fn(&Observables) -> f64| window.iter().map(|o| f(o)).collect::<Vec<f64>>();
+    let phi = series(&|o| o.volume_fraction);
+    let mu = series(&|o| if o.stress[1][1] != 0.0 { o.stress[0][1].abs() / o.stress[1][1] } else { 0.0 });
+    let est = |x: &[f64]| block_average(x).expect("window has ≥ 8 rows");
+    let first = window[0].time * dv.shear_rate;
+    let last = window[window.len() - 1].time * dv.shear_rate;
+    let sigma_yy = est(&series(&|o| o.stress[1][1]));
+    let mut notes = Vec::new();
+    if last - first < 2.0 {
+        notes.push(format!("only {:.2} strain units past the transient", last - first));
+    }
+    if !halves_agree(&phi, 2e-3) {
+        notes.push("volume fraction still drifting".to_string());
+    }
+    if !halves_agree(&mu, 2e-2) {
+        notes.push("macroscopic friction still drifting".to_string());
+    }
+    let p = sigma_yy.mean;
+    Some(SteadyState {
+        steady: notes.is_empty(),
+        note: notes.join("; "),
+        strain_window: [first, last],
+        volume_fraction: est(&phi),
+        friction: est(&mu),
+        coordination: est(&series(&|o| o.coordination)),
+        sigma_yy,
+        shear_stress: est(&series(&|o| o.stress[0][1].abs())),
+        mean_stress: est(&series(&|o| o.mean_stress())),
+        granular_temperature: est(&series(&|o| o.granular_temperature)),
+        sliding_fraction: est(&series(&|o| o.sliding_fraction)),
+        bridges_per_particle: est(&series(&|o| o.bridges_per_particle)),
+        inertial_measured: dv.shear_rate * spec.diameter / (p / spec.density).sqrt(),
+        softness_measured: p * spec.diameter / spec.stiffness,
+        bond_measured: if p > 0.0 { dv.max_force / (p * spec.diameter * spec.diameter) } else { 0.0 },
+    })
+}

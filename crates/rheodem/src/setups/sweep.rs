@@ -1,0 +1,178 @@
+//! Many shear-box points: a list and/or grid of [`ShearBoxSpec`]s run several at once, each
+//! on one thread, resumable (finished points are skipped, interrupted ones resume from
+//! their checkpoint), collected into one results table.
+//!
+//! ```toml
+//! out = "runs/my-sweep"       # optional: default runs/<file name>
+//! [base]                      # fields shared by every point (any ShearBoxSpec field)
+//! particles = 4096
+//! polydispersity = 3.0
+//! [grid]                      # optional: every combination of the listed values
+//! mu_p = [0.01, 0.5]
+//! bond = [0.5, 1.0]
+//! [[point]]                   # optional: individual points (base ⊕ point)
+//! mu_p = 0.01
+//! inertial = 0.02
+//! softness = 0.01
+//! ```
+
+use super::shear_box::{ShearBoxSpec, SteadyState, steady_state};
+use crate::io::atomic::write_atomic;
+use crate::run::{Run, RunError};
+use crate::scenario::{ScenarioError, invalid};
+use serde::{Deserialize, Serialize};
+use std::fmt::Write;
+use std::path::{Path, PathBuf};
+
+/// A sweep file.
+#[derive(Clone, Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SweepSpec {
+    /// Output directory.
+    #[serde(default)]
+    pub out: Option<String>,
+    /// Fields shared by every point.
+    #[serde(default)]
+    pub base: toml::Table,
+    /// Cartesian product of value lists.
+    #[serde(default)]
+    pub grid: toml::Table,
+    /// Individual points.
+    #[serde(default)]
+    pub point: Vec<toml::Table>,
+}
+
+/// Expands the sweep into its points, each with a directory name built from its controls.
+pub fn expand(spec: &SweepSpec) -> Result<Vec<(String, ShearBoxSpec)>, ScenarioError> {
+    let mut tables: Vec<toml::Table> = Vec::new();
+    if !spec.grid.is_empty() {
+        let mut combos = vec![toml::Table::new()];
+        for (key, values) in &spec.grid {
+            let list = values
+                .as_array()
+                .ok_or_else(|| invalid(format!("grid.{key}"), values, "must be a list of values"))?;
+            if list.is_empty() {
+                return Err(invalid(format!("grid.{key}"), "[]", "must list at least one value"));
+            }
+            combos = combos
+                .into_iter()
+                .flat_map(|c| {
+                    list.iter().map(move |v| {
+                        let mut c = c.clone();
+                        c.insert(key.clone(), v.clone());
+                        c
+                    })
+                })
+                .collect();
+        }
+        tables.extend(combos);
+    }
+    tables.extend(spec.point.iter().cloned());
+    if tables.is_empty() {
+        return Err(invalid("point", "[]", "give [[point]] entries or a [grid]"));
+    }
+    let mut out = Vec::new();
+    for (k, extra) in tables.into_iter().enumerate() {
+        let mut t = spec.base.clone();
+        t.extend(extra);
+        let text = toml::to_string(&t).unwrap_or_default();
+        let point: ShearBoxSpec = toml::from_str(&text).map_err(|e| ScenarioError::Parse(format!("sweep point {k}: {e}")))?;
+        point.derive().map_err(|e| ScenarioError::Parse(format!("sweep point {k}: {e}")))?;
+        let name = format!(
+            "mu{}_I{}_p{}_Bo{}_{:?}_w{}_N{}_s{}",
+            point.mu_p, point.inertial, point.softness, point.bond, point.cohesion, point.polydispersity, point.particles, point.seed
+        )
+        .to_lowercase();
+        if out.iter().any(|(n, _)| *n == name) {
+            return Err(invalid(format!("point {k}"), name, "duplicates an earlier point"));
+        }
+        out.push((name, point));
+    }
+    Ok(out)
+}
+
+/// Outcome of one point.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct PointResult {
+    /// Directory name of the point.
+    pub name: String,
+    /// The point.
+    pub spec: ShearBoxSpec,
+    /// Derived SI values.
+    pub derived: super::shear_box::Derived,
+    /// Steady-state averages (`None` if too few rows).
+    pub steady_state: Option<SteadyState>,
+    /// Wall-clock seconds of the run (all sessions).
+    pub wall_seconds: f64,
+}
+
+/// Runs (or resumes, or skips when finished) one point in `dir` with the current rayon
+/// pool, writing `steady_state.json` at the end.
+pub fn run_point(name: &str, spec: &ShearBoxSpec, dir: &Path, threads: usize, progress: &mut dyn FnMut(u64, u64)) -> Result<PointResult, RunError> {
+    let result_path = dir.join("steady_state.json");
+    if let Ok(text) = std::fs::read_to_string(&result_path) {
+        if let Ok(done) = serde_json::from_str::<PointResult>(&text) {
+            if done.spec == *spec {
+                return Ok(done);
+            }
+        }
+    }
+    let derived = spec.derive()?;
+    let mut run = if dir.join("checkpoint.bin").exists() {
+        Run::resume(dir)?
+    } else {
+        Run::start(spec.scenario()?, Path::new("."), dir, threads, true)?
+    };
+    run.advance_until(dir, run.plan.steps, progress)?;
+    let result = PointResult {
+        name: name.to_string(),
+        spec: spec.clone(),
+        derived,
+        steady_state: steady_state(&run.rows, spec, &derived),
+        wall_seconds: run.wall_seconds,
+    };
+    let json = serde_json::to_string_pretty(&result).unwrap_or_default();
+    write_atomic(&result_path, json.as_bytes()).map_err(|source| RunError::Io { path: result_path.clone(), source })?;
+    Ok(result)
+}
+
+/// The results table (CSV), one row per finished point.
+pub fn results_csv(results: &[PointResult]) -> String {
+    let mut s = String::from(
+        "name,mu_p,inertial,softness,bond,cohesion,range,polydispersity,particles,seed,pressure_Pa,shear_rate_per_s,\
+         steady,strain_from,strain_to,phi,phi_err,mu,mu_err,Z,Z_err,sigma_yy_Pa,sigma_yy_err,mean_stress_Pa,mean_stress_err,\
+         granular_temperature,sliding_fraction,bridges_per_particle,I_measured,pstar_measured,Bo_measured,wall_seconds,note\n",
+    );
+    for r in results {
+        let p = &r.spec;
+        let _ = write!(
+            s,
+            "{},{},{},{},{},{:?},{},{},{},{},{:e},{:e},",
+            r.name, p.mu_p, p.inertial, p.softness, p.bond, p.cohesion, p.range, p.polydispersity, p.particles, p.seed,
+            r.derived.pressure, r.derived.shear_rate
+        );
+        match &r.steady_state {
+            Some(ss) => {
+                let _ = writeln!(
+                    s,
+                    "{},{:.3},{:.3},{:.6},{:.6},{:.5},{:.5},{:.4},{:.4},{:.6e},{:.3e},{:.6e},{:.3e},{:.4e},{:.5},{:.5},{:.5},{:.5},{:.5},{:.1},\"{}\"",
+                    ss.steady, ss.strain_window[0], ss.strain_window[1], ss.volume_fraction.mean, ss.volume_fraction.error,
+                    ss.friction.mean, ss.friction.error, ss.coordination.mean, ss.coordination.error, ss.sigma_yy.mean,
+                    ss.sigma_yy.error, ss.mean_stress.mean, ss.mean_stress.error, ss.granular_temperature.mean,
+                    ss.sliding_fraction.mean, ss.bridges_per_particle.mean, ss.inertial_measured, ss.softness_measured,
+                    ss.bond_measured, r.wall_seconds, ss.note
+                );
+            }
+            None => {
+                let _ = writeln!(s, "false,,,,,,,,,,,,,,,,,,,,{:.1},\"too few rows\"", r.wall_seconds);
+            }
+        }
+    }
+    s
+}
+
+/// Default output directory of a sweep file.
+pub fn default_out(path: &Path) -> PathBuf {
+    let stem = path.file_stem().map_or("sweep".into(), |s| s.to_string_lossy().into_owned());
+    Path::new("runs").join(stem)
+}
