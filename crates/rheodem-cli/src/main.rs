@@ -67,6 +67,12 @@ enum Command {
         #[arg(long, short)]
         quiet: bool,
     },
+    /// Compare the finished points of a sweep directory with seed 000's fitted laws
+    /// (markdown table).
+    Compare {
+        /// The sweep's output directory.
+        dir: PathBuf,
+    },
     /// Contact-law tools: force–overlap curves, equivalent linear model.
     #[command(subcommand)]
     Contact(contact::ContactCommand),
@@ -217,6 +223,7 @@ fn run(cli: Cli) -> Result<()> {
         Command::Contact(cmd) => contact::run(cmd),
         Command::ShearBox(args) => shear::shear_box(args),
         Command::Sweep { file, jobs, quiet } => shear::sweep(&file, jobs, quiet),
+        Command::Compare { dir } => shear::compare(&dir),
         Command::Check { scenario } => {
             let sc = Scenario::from_file(&scenario)?;
             let base = scenario.parent().unwrap_or(Path::new("."));

@@ -228,3 +228,33 @@ pub fn sweep(path: &Path, jobs: Option<usize>, quiet: bool) -> Result<()> {
     }
     Ok(())
 }
+
+/// Runs `compare`: the validation table of a sweep directory, plus the progress of the
+/// points still running.
+pub fn compare(dir: &Path) -> Result<()> {
+    let mut finished = Vec::new();
+    let mut running = Vec::new();
+    let mut entries: Vec<PathBuf> = std::fs::read_dir(dir)
+        .with_context(|| format!("cannot read {}", dir.display()))?
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| p.is_dir())
+        .collect();
+    entries.sort();
+    for point in entries {
+        let name = point.file_name().map_or(String::new(), |s| s.to_string_lossy().into_owned());
+        if let Ok(text) = std::fs::read_to_string(point.join("steady_state.json")) {
+            let r: PointResult = serde_json::from_str(&text).with_context(|| format!("{}/steady_state.json", point.display()))?;
+            finished.push(r);
+        } else if let Ok(text) = std::fs::read_to_string(point.join("summary.json")) {
+            let v: serde_json::Value = serde_json::from_str(&text).unwrap_or_default();
+            let done = v["steps_done"].as_f64().unwrap_or(0.0);
+            let total = v["steps_total"].as_f64().unwrap_or(1.0).max(1.0);
+            running.push(format!("- `{name}`: {:.0} % of its steps (checkpointed; `rheodem sweep` resumes it)", 100.0 * done / total));
+        }
+    }
+    print!("{}", rheodem::setups::compare::comparison_markdown(&finished));
+    if !running.is_empty() {
+        println!("\nNot finished:\n{}", running.join("\n"));
+    }
+    Ok(())
+}

@@ -16,6 +16,7 @@ pub mod measure;
 pub mod neighbor;
 pub mod particles;
 pub mod plot;
+pub mod rheology;
 pub mod run;
 pub mod scenario;
 pub mod setups;

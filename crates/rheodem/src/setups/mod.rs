@@ -1,4 +1,5 @@
 //! Builders of the standard set-ups.
 
+pub mod compare;
 pub mod shear_box;
 pub mod sweep;
