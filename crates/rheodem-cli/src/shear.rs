@@ -61,6 +61,10 @@ pub struct ShearBoxArgs {
     /// Seed.
     #[arg(long)]
     seed: Option<u64>,
+    /// Seed-code contact convention (relative velocities without the mean flow), for
+    /// comparison only.
+    #[arg(long)]
+    peculiar_contacts: bool,
     /// Run directory (default: runs/shear-box).
     #[arg(long, short)]
     out: Option<PathBuf>,
@@ -75,8 +79,10 @@ pub struct ShearBoxArgs {
 fn spec_from(a: &ShearBoxArgs) -> Result<ShearBoxSpec> {
     let mut table: toml::Table = match &a.config {
         Some(path) => {
-            let text = std::fs::read_to_string(path).with_context(|| format!("cannot read {}", path.display()))?;
-            toml::from_str(&text).with_context(|| format!("{} is not valid TOML", path.display()))?
+            let text = std::fs::read_to_string(path)
+                .with_context(|| format!("cannot read {}", path.display()))?;
+            toml::from_str(&text)
+                .with_context(|| format!("{} is not valid TOML", path.display()))?
         }
         None => toml::Table::new(),
     };
@@ -97,20 +103,33 @@ fn spec_from(a: &ShearBoxArgs) -> Result<ShearBoxSpec> {
     set("stiffness", f(a.stiffness));
     set("restitution", f(a.restitution));
     set("polydispersity", f(a.polydispersity));
-    set("particles", a.particles.map(|n| toml::Value::Integer(n as i64)));
+    set(
+        "particles",
+        a.particles.map(|n| toml::Value::Integer(n as i64)),
+    );
     set("strain", f(a.strain));
     set("transient_strain", f(a.transient_strain));
     set("seed", a.seed.map(|n| toml::Value::Integer(n as i64)));
+    set(
+        "peculiar_contacts",
+        a.peculiar_contacts.then_some(toml::Value::Boolean(true)),
+    );
     let text = toml::to_string(&table).unwrap_or_default();
-    let spec: ShearBoxSpec = toml::from_str(&text).map_err(|e| anyhow::anyhow!("shear-box point: {e}"))?;
+    let spec: ShearBoxSpec =
+        toml::from_str(&text).map_err(|e| anyhow::anyhow!("shear-box point: {e}"))?;
     spec.derive()?;
     Ok(spec)
 }
 
 fn bar(total: u64, quiet: bool, prefix: String) -> ProgressBar {
-    let bar = if quiet { ProgressBar::hidden() } else { ProgressBar::new(total) };
+    let bar = if quiet {
+        ProgressBar::hidden()
+    } else {
+        ProgressBar::new(total)
+    };
     bar.set_style(
-        ProgressStyle::with_template("{prefix} {bar:30} {percent:>3}%  ETA {eta}").unwrap_or_else(|_| ProgressStyle::default_bar()),
+        ProgressStyle::with_template("{prefix} {bar:30} {percent:>3}%  ETA {eta}")
+            .unwrap_or_else(|_| ProgressStyle::default_bar()),
     );
     bar.set_prefix(prefix);
     bar
@@ -120,8 +139,13 @@ fn bar(total: u64, quiet: bool, prefix: String) -> ProgressBar {
 pub fn shear_box(a: ShearBoxArgs) -> Result<()> {
     let spec = spec_from(&a)?;
     let dv = spec.derive()?;
-    let dir = a.out.clone().unwrap_or_else(|| PathBuf::from("runs/shear-box"));
-    let n = a.threads.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
+    let dir = a
+        .out
+        .clone()
+        .unwrap_or_else(|| PathBuf::from("runs/shear-box"));
+    let n = a
+        .threads
+        .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
     if n == 0 {
         bail!("--threads must be at least 1");
     }
@@ -129,11 +153,19 @@ pub fn shear_box(a: ShearBoxArgs) -> Result<()> {
     if !a.quiet {
         eprintln!(
             "resolved: p = σ_yy target = {:.6e} Pa, γ̇ = {:.6e} 1/s, f_a^max = {:.6e} N, S_c = {:.4e} m, t_k = {:.4e} s, run {:.4e} s ({} strain)",
-            dv.pressure, dv.shear_rate, dv.max_force, dv.rupture_distance, dv.stiffness_time, dv.duration, spec.strain
+            dv.pressure,
+            dv.shear_rate,
+            dv.max_force,
+            dv.rupture_distance,
+            dv.stiffness_time,
+            dv.duration,
+            spec.strain
         );
     }
     let progress = bar(1000, a.quiet, "shear".into());
-    let name = dir.file_name().map_or("shear-box".into(), |s| s.to_string_lossy().into_owned());
+    let name = dir
+        .file_name()
+        .map_or("shear-box".into(), |s| s.to_string_lossy().into_owned());
     let result = pool.install(|| {
         run_point(&name, &spec, &dir, n, &mut |done, total| {
             if done % 256 == 0 {
@@ -151,28 +183,56 @@ fn report(r: &PointResult, dir: &Path) {
         Some(ss) => {
             println!(
                 "steady state over strain {:.1}–{:.1}: φ = {:.5} ± {:.5}, μ = {:.4} ± {:.4}, Z = {:.3} ± {:.3}, σ_yy = {:.5e} ± {:.1e} Pa (target {:.5e}), P = tr σ/3 = {:.5e} Pa",
-                ss.strain_window[0], ss.strain_window[1], ss.volume_fraction.mean, ss.volume_fraction.error, ss.friction.mean,
-                ss.friction.error, ss.coordination.mean, ss.coordination.error, ss.sigma_yy.mean, ss.sigma_yy.error,
-                r.derived.pressure, ss.mean_stress.mean
+                ss.strain_window[0],
+                ss.strain_window[1],
+                ss.volume_fraction.mean,
+                ss.volume_fraction.error,
+                ss.friction.mean,
+                ss.friction.error,
+                ss.coordination.mean,
+                ss.coordination.error,
+                ss.sigma_yy.mean,
+                ss.sigma_yy.error,
+                r.derived.pressure,
+                ss.mean_stress.mean
             );
             if !ss.steady {
-                eprintln!("warning: {} did NOT reach a steady state: {}", dir.display(), ss.note);
+                eprintln!(
+                    "warning: {} did NOT reach a steady state: {}",
+                    dir.display(),
+                    ss.note
+                );
             }
         }
-        None => eprintln!("warning: {}: too few time-series rows past the transient to average", dir.display()),
+        None => eprintln!(
+            "warning: {}: too few time-series rows past the transient to average",
+            dir.display()
+        ),
     }
     println!("outputs in {}", dir.display());
 }
 
 /// Runs `sweep`: `jobs` points at once, one thread each.
 pub fn sweep(path: &Path, jobs: Option<usize>, quiet: bool) -> Result<()> {
-    let text = std::fs::read_to_string(path).with_context(|| format!("cannot read {}", path.display()))?;
-    let spec: SweepSpec = toml::from_str(&text).map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
+    let text =
+        std::fs::read_to_string(path).with_context(|| format!("cannot read {}", path.display()))?;
+    let spec: SweepSpec =
+        toml::from_str(&text).map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
     let points = expand(&spec)?;
-    let out = spec.out.as_ref().map_or_else(|| default_out(path), PathBuf::from);
+    let out = spec
+        .out
+        .as_ref()
+        .map_or_else(|| default_out(path), PathBuf::from);
     std::fs::create_dir_all(&out).with_context(|| format!("cannot create {}", out.display()))?;
-    let jobs = jobs.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get())).max(1);
-    eprintln!("{} points, {} at a time → {}", points.len(), jobs, out.display());
+    let jobs = jobs
+        .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()))
+        .max(1);
+    eprintln!(
+        "{} points, {} at a time → {}",
+        points.len(),
+        jobs,
+        out.display()
+    );
     let next = AtomicUsize::new(0);
     let results: Mutex<Vec<Option<PointResult>>> = Mutex::new(vec![None; points.len()]);
     let errors: Mutex<Vec<String>> = Mutex::new(Vec::new());
@@ -189,7 +249,9 @@ pub fn sweep(path: &Path, jobs: Option<usize>, quiet: bool) -> Result<()> {
                 };
                 loop {
                     let k = next.fetch_add(1, Ordering::SeqCst);
-                    let Some((name, point)) = points.get(k) else { break };
+                    let Some((name, point)) = points.get(k) else {
+                        break;
+                    };
                     let dir = out.join(name);
                     let mut last = 0u64;
                     let outcome = pool.install(|| {
@@ -208,12 +270,16 @@ pub fn sweep(path: &Path, jobs: Option<usize>, quiet: bool) -> Result<()> {
                             }
                             if let Ok(mut all) = results.lock() {
                                 all[k] = Some(r);
-                                let done: Vec<PointResult> = all.iter().flatten().cloned().collect();
+                                let done: Vec<PointResult> =
+                                    all.iter().flatten().cloned().collect();
                                 let _ = write_atomic(&table, results_csv(&done).as_bytes());
                             }
                         }
                         Err(e) => {
-                            errors.lock().map(|mut v| v.push(format!("{name}: {e}"))).ok();
+                            errors
+                                .lock()
+                                .map(|mut v| v.push(format!("{name}: {e}")))
+                                .ok();
                         }
                     }
                 }
@@ -221,8 +287,17 @@ pub fn sweep(path: &Path, jobs: Option<usize>, quiet: bool) -> Result<()> {
         }
     });
     let errors = errors.into_inner().unwrap_or_default();
-    let done = results.into_inner().unwrap_or_default().into_iter().flatten().count();
-    println!("{done} of {} points finished; table in {}", points.len(), table.display());
+    let done = results
+        .into_inner()
+        .unwrap_or_default()
+        .into_iter()
+        .flatten()
+        .count();
+    println!(
+        "{done} of {} points finished; table in {}",
+        points.len(),
+        table.display()
+    );
     if !errors.is_empty() {
         bail!("{} points failed:\n{}", errors.len(), errors.join("\n"));
     }
@@ -241,18 +316,27 @@ pub fn compare(dir: &Path) -> Result<()> {
         .collect();
     entries.sort();
     for point in entries {
-        let name = point.file_name().map_or(String::new(), |s| s.to_string_lossy().into_owned());
+        let name = point
+            .file_name()
+            .map_or(String::new(), |s| s.to_string_lossy().into_owned());
         if let Ok(text) = std::fs::read_to_string(point.join("steady_state.json")) {
-            let r: PointResult = serde_json::from_str(&text).with_context(|| format!("{}/steady_state.json", point.display()))?;
+            let r: PointResult = serde_json::from_str(&text)
+                .with_context(|| format!("{}/steady_state.json", point.display()))?;
             finished.push(r);
         } else if let Ok(text) = std::fs::read_to_string(point.join("summary.json")) {
             let v: serde_json::Value = serde_json::from_str(&text).unwrap_or_default();
             let done = v["steps_done"].as_f64().unwrap_or(0.0);
             let total = v["steps_total"].as_f64().unwrap_or(1.0).max(1.0);
-            running.push(format!("- `{name}`: {:.0} % of its steps (checkpointed; `rheodem sweep` resumes it)", 100.0 * done / total));
+            running.push(format!(
+                "- `{name}`: {:.0} % of its steps (checkpointed; `rheodem sweep` resumes it)",
+                100.0 * done / total
+            ));
         }
     }
-    print!("{}", rheodem::setups::compare::comparison_markdown(&finished));
+    print!(
+        "{}",
+        rheodem::setups::compare::comparison_markdown(&finished)
+    );
     if !running.is_empty() {
         println!("\nNot finished:\n{}", running.join("\n"));
     }

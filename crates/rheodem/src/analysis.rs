@@ -30,7 +30,10 @@ pub fn block_average(x: &[f64]) -> Option<Estimate> {
         let bm = blocks.iter().sum::<f64>() / m;
         let var = blocks.iter().map(|b| (b - bm) * (b - bm)).sum::<f64>() / (m - 1.0);
         best = best.max((var / m).sqrt());
-        blocks = blocks.chunks_exact(2).map(|c| 0.5 * (c[0] + c[1])).collect();
+        blocks = blocks
+            .chunks_exact(2)
+            .map(|c| 0.5 * (c[0] + c[1]))
+            .collect();
     }
     if best == 0.0 {
         let var = x.iter().map(|v| (v - mean) * (v - mean)).sum::<f64>() / (n as f64 - 1.0);
@@ -69,7 +72,11 @@ mod tests {
         let e = block_average(&x).expect("enough samples");
         let expected = (1.0f64 / 12.0).sqrt() / 64.0;
         assert!(e.mean.abs() < 4.0 * expected);
-        assert!((e.error / expected - 1.0).abs() < 0.35, "{} vs {expected}", e.error);
+        assert!(
+            (e.error / expected - 1.0).abs() < 0.35,
+            "{} vs {expected}",
+            e.error
+        );
     }
 
     #[test]
@@ -81,14 +88,20 @@ mod tests {
             .collect();
         let e = block_average(&x).expect("enough samples");
         let expected = (1.0f64 / 12.0).sqrt() / (128f64).sqrt();
-        assert!((e.error / expected - 1.0).abs() < 0.4, "{} vs {expected}", e.error);
+        assert!(
+            (e.error / expected - 1.0).abs() < 0.4,
+            "{} vs {expected}",
+            e.error
+        );
     }
 
     #[test]
     fn a_trend_is_not_steady() {
         let x: Vec<f64> = (0..200).map(|k| k as f64).collect();
         assert!(!halves_agree(&x, 1e-3));
-        let flat: Vec<f64> = (0..200).map(|k| 1.0 + 1e-3 * ((k * 7919) % 13) as f64).collect();
+        let flat: Vec<f64> = (0..200)
+            .map(|k| 1.0 + 1e-3 * ((k * 7919) % 13) as f64)
+            .collect();
         assert!(halves_agree(&flat, 1e-3));
     }
 }

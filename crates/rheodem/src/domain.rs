@@ -87,6 +87,12 @@ pub struct LeesEdwards {
     /// How often `shift` has been brought back into its range (each time the image codes
     /// of the neighbour list change meaning, so the list must be rebuilt).
     pub wraps: u64,
+    /// Seed-code convention for contacts (for comparison only): relative velocities at
+    /// contacts exclude the mean-flow difference `γ̇ (y_i − y_j) x̂`, as in codes that move
+    /// particles affinely and integrate only velocities relative to the mean flow. The
+    /// default (false) is the lab frame, where damping and springs see the mean shear.
+    #[serde(default)]
+    pub peculiar_contacts: bool,
 }
 
 /// An axis-aligned box `[lo, hi]` with per-axis periodicity, optionally sheared by
@@ -124,6 +130,7 @@ impl Domain {
             shear_rate,
             shift: 0.0,
             wraps: 0,
+            peculiar_contacts: false,
         });
         self
     }
@@ -156,6 +163,14 @@ impl Domain {
             shear.y_axis.x = strain;
             self.deformation = shear * self.deformation;
         }
+    }
+
+    /// Rate `γ̇` (1/s) of the mean-flow difference that contacts subtract from their
+    /// relative velocity: non-zero only under the seed-code convention.
+    pub fn contact_flow_rate(&self) -> f64 {
+        self.lees_edwards
+            .filter(|le| le.peculiar_contacts)
+            .map_or(0.0, |le| le.shear_rate)
     }
 
     /// How often the image codes have changed meaning (Lees-Edwards shift wraps).

@@ -45,17 +45,21 @@ struct Inputs<'a> {
     images: &'a [ImageTransform; IMAGE_COUNT],
     laws: &'a ContactTable,
     max_range: f64,
+    flow_rate: f64,
     dt: f64,
 }
 
 /// Zeroes the particle forces and torques and adds every pair force of the list, advancing
-/// contact history over `dt` (s). With `LEVEL` = [`MEASURE_STRESS`] it also sums the contact
-/// stress; with [`MEASURE_ALL`] every contact observable.
+/// contact history over `dt` (s). `flow_rate` (1/s) is subtracted as `γ̇ l_y x̂` from each
+/// contact's relative velocity (zero in the lab frame; see `LeesEdwards::peculiar_contacts`).
+/// With `LEVEL` = [`MEASURE_STRESS`] it also sums the contact stress; with [`MEASURE_ALL`]
+/// every contact observable.
 pub fn pair_forces<const LEVEL: u8>(
     particles: &mut Particles,
     list: &mut NeighborList,
     laws: &ContactTable,
     images: &[ImageTransform; IMAGE_COUNT],
+    flow_rate: f64,
     dt: f64,
     scratch: &mut ForceScratch,
 ) -> ContactSums {
@@ -76,6 +80,7 @@ pub fn pair_forces<const LEVEL: u8>(
         images,
         laws,
         max_range: laws.max_range(),
+        flow_rate,
         dt,
     };
 
@@ -190,7 +195,7 @@ fn chunk_forces<const LEVEL: u8>(
                 overlap: sum - dist,
                 radius_i: a_i,
                 radius_j: inp.radius[j],
-                velocity: inp.velocity[i] - v_j,
+                velocity: inp.velocity[i] - v_j - DVec3::new(inp.flow_rate * branch.y, 0.0, 0.0),
                 omega_i: inp.omega[i],
                 omega_j: w_j,
                 reduced_mass: 1.0 / (inp.inv_mass[i] + inp.inv_mass[j]),

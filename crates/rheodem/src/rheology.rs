@@ -45,30 +45,123 @@ pub struct MuLaw {
 
 /// Seed 000 Table 3 (`μ_p, φ_0, I_φ, p*_φ`) joined with Table 5 (`p₁ … p₄`), simple shear.
 pub const PHI_LAWS: [PhiLaw; 11] = [
-    PhiLaw { mu_p: 0.00, phi_0: 0.656, i_phi: 1.960, p_phi: 0.271, gc: [-0.0175, -0.0060, 0.0029, -0.0003] },
-    PhiLaw { mu_p: 0.01, phi_0: 0.653, i_phi: 2.246, p_phi: 0.272, gc: [-0.0237, -0.0056, 0.0034, -0.0004] },
-    PhiLaw { mu_p: 0.05, phi_0: 0.643, i_phi: 3.171, p_phi: 0.274, gc: [-0.0394, 0.0030, 0.0015, 0.0002] },
-    PhiLaw { mu_p: 0.10, phi_0: 0.634, i_phi: 3.959, p_phi: 0.276, gc: [-0.0564, 0.0134, -0.0011, 0.00003] },
-    PhiLaw { mu_p: 0.20, phi_0: 0.619, i_phi: 4.806, p_phi: 0.280, gc: [-0.0845, 0.0310, -0.0058, 0.0005] },
-    PhiLaw { mu_p: 0.30, phi_0: 0.610, i_phi: 5.166, p_phi: 0.283, gc: [-0.1091, 0.0480, -0.0107, 0.0010] },
-    PhiLaw { mu_p: 0.40, phi_0: 0.603, i_phi: 5.319, p_phi: 0.285, gc: [-0.1195, 0.0542, -0.0125, 0.0011] },
-    PhiLaw { mu_p: 0.50, phi_0: 0.595, i_phi: 5.383, p_phi: 0.287, gc: [-0.1359, 0.0668, -0.0162, 0.0015] },
-    PhiLaw { mu_p: 0.70, phi_0: 0.591, i_phi: 5.422, p_phi: 0.291, gc: [-0.1516, 0.0779, -0.0195, 0.0018] },
-    PhiLaw { mu_p: 0.90, phi_0: 0.585, i_phi: 5.429, p_phi: 0.293, gc: [-0.1494, 0.0733, -0.0176, 0.0016] },
-    PhiLaw { mu_p: 1.00, phi_0: 0.583, i_phi: 5.430, p_phi: 0.293, gc: [-0.1511, 0.0746, -0.0181, 0.0017] },
+    PhiLaw {
+        mu_p: 0.00,
+        phi_0: 0.656,
+        i_phi: 1.960,
+        p_phi: 0.271,
+        gc: [-0.0175, -0.0060, 0.0029, -0.0003],
+    },
+    PhiLaw {
+        mu_p: 0.01,
+        phi_0: 0.653,
+        i_phi: 2.246,
+        p_phi: 0.272,
+        gc: [-0.0237, -0.0056, 0.0034, -0.0004],
+    },
+    PhiLaw {
+        mu_p: 0.05,
+        phi_0: 0.643,
+        i_phi: 3.171,
+        p_phi: 0.274,
+        gc: [-0.0394, 0.0030, 0.0015, 0.0002],
+    },
+    PhiLaw {
+        mu_p: 0.10,
+        phi_0: 0.634,
+        i_phi: 3.959,
+        p_phi: 0.276,
+        gc: [-0.0564, 0.0134, -0.0011, 0.00003],
+    },
+    PhiLaw {
+        mu_p: 0.20,
+        phi_0: 0.619,
+        i_phi: 4.806,
+        p_phi: 0.280,
+        gc: [-0.0845, 0.0310, -0.0058, 0.0005],
+    },
+    PhiLaw {
+        mu_p: 0.30,
+        phi_0: 0.610,
+        i_phi: 5.166,
+        p_phi: 0.283,
+        gc: [-0.1091, 0.0480, -0.0107, 0.0010],
+    },
+    PhiLaw {
+        mu_p: 0.40,
+        phi_0: 0.603,
+        i_phi: 5.319,
+        p_phi: 0.285,
+        gc: [-0.1195, 0.0542, -0.0125, 0.0011],
+    },
+    PhiLaw {
+        mu_p: 0.50,
+        phi_0: 0.595,
+        i_phi: 5.383,
+        p_phi: 0.287,
+        gc: [-0.1359, 0.0668, -0.0162, 0.0015],
+    },
+    PhiLaw {
+        mu_p: 0.70,
+        phi_0: 0.591,
+        i_phi: 5.422,
+        p_phi: 0.291,
+        gc: [-0.1516, 0.0779, -0.0195, 0.0018],
+    },
+    PhiLaw {
+        mu_p: 0.90,
+        phi_0: 0.585,
+        i_phi: 5.429,
+        p_phi: 0.293,
+        gc: [-0.1494, 0.0733, -0.0176, 0.0016],
+    },
+    PhiLaw {
+        mu_p: 1.00,
+        phi_0: 0.583,
+        i_phi: 5.430,
+        p_phi: 0.293,
+        gc: [-0.1511, 0.0746, -0.0181, 0.0017],
+    },
 ];
 
 /// Seed 000 Table 7, simple-shear rows (`μ_p` = 0, 0.01, 0.5).
 pub const MU_LAWS: [MuLaw; 3] = [
-    MuLaw { mu_p: 0.00, mu_0: 0.1432, mu_inf: 0.3281, i_mu: 0.0645, p_mu: 0.4222, alpha: 0.3136, beta: 1.6475 },
-    MuLaw { mu_p: 0.01, mu_0: 0.1645, mu_inf: 0.3499, i_mu: 0.0818, p_mu: 0.4950, alpha: 0.4490, beta: 1.5218 },
-    MuLaw { mu_p: 0.50, mu_0: 0.3530, mu_inf: 0.7148, i_mu: 0.7184, p_mu: 0.3905, alpha: 0.2551, beta: 1.5125 },
+    MuLaw {
+        mu_p: 0.00,
+        mu_0: 0.1432,
+        mu_inf: 0.3281,
+        i_mu: 0.0645,
+        p_mu: 0.4222,
+        alpha: 0.3136,
+        beta: 1.6475,
+    },
+    MuLaw {
+        mu_p: 0.01,
+        mu_0: 0.1645,
+        mu_inf: 0.3499,
+        i_mu: 0.0818,
+        p_mu: 0.4950,
+        alpha: 0.4490,
+        beta: 1.5218,
+    },
+    MuLaw {
+        mu_p: 0.50,
+        mu_0: 0.3530,
+        mu_inf: 0.7148,
+        i_mu: 0.7184,
+        p_mu: 0.3905,
+        alpha: 0.2551,
+        beta: 1.5125,
+    },
 ];
 
 impl PhiLaw {
     /// The seed's row for `μ_p` (exact match within 1e-9), if tabulated.
     pub fn for_mu_p(mu_p: f64) -> Option<PhiLaw> {
-        PHI_LAWS.iter().copied().find(|l| (l.mu_p - mu_p).abs() < 1e-9)
+        PHI_LAWS
+            .iter()
+            .copied()
+            .find(|l| (l.mu_p - mu_p).abs() < 1e-9)
     }
 
     /// Cohesive correction `g_c(Bo)`.
@@ -79,14 +172,20 @@ impl PhiLaw {
 
     /// `φ(I, p*, Bo)` (000 Eq. 16).
     pub fn phi(&self, inertial: f64, softness: f64, bond: f64) -> f64 {
-        self.phi_0 * (1.0 - inertial / self.i_phi) * (1.0 + (1.0 + bond) * softness / self.p_phi) * self.g_c(bond)
+        self.phi_0
+            * (1.0 - inertial / self.i_phi)
+            * (1.0 + (1.0 + bond) * softness / self.p_phi)
+            * self.g_c(bond)
     }
 }
 
 impl MuLaw {
     /// The seed's row for `μ_p` (exact match within 1e-9), if tabulated.
     pub fn for_mu_p(mu_p: f64) -> Option<MuLaw> {
-        MU_LAWS.iter().copied().find(|l| (l.mu_p - mu_p).abs() < 1e-9)
+        MU_LAWS
+            .iter()
+            .copied()
+            .find(|l| (l.mu_p - mu_p).abs() < 1e-9)
     }
 
     /// `μ(I, p*, Bo)` (000 Eq. 1A).
@@ -105,12 +204,16 @@ mod tests {
     #[test]
     fn reference_points() {
         // μ_p = 0.5, I = 0.02, p* = 0.01: 0.595 (1 − 0.02/5.383)(1 + 0.01/0.287).
-        let phi = PhiLaw::for_mu_p(0.5).expect("tabulated").phi(0.02, 0.01, 0.0);
+        let phi = PhiLaw::for_mu_p(0.5)
+            .expect("tabulated")
+            .phi(0.02, 0.01, 0.0);
         assert!((phi - 0.595 * (1.0 - 0.02 / 5.383) * (1.0 + 0.01 / 0.287)).abs() < 1e-15);
         assert!((phi - 0.61342).abs() < 1e-4);
         let g = PhiLaw::for_mu_p(0.01).expect("tabulated").g_c(2.0);
         assert!((g - (1.0 - 0.0474 - 0.0224 + 0.0272 - 0.0064)).abs() < 1e-12);
-        let mu = MuLaw::for_mu_p(0.01).expect("tabulated").mu(0.02, 0.01, 0.0);
+        let mu = MuLaw::for_mu_p(0.01)
+            .expect("tabulated")
+            .mu(0.02, 0.01, 0.0);
         assert!((mu - 0.1724).abs() < 1e-3, "{mu}");
     }
 }

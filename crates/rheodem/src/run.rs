@@ -127,7 +127,9 @@ struct Summary<'a> {
     last: Option<&'a Observables>,
 }
 
-const CHECKPOINT_MAGIC: &[u8; 8] = b"RHEODEM1";
+/// Header of checkpoint files. The body is MessagePack with named fields, so a checkpoint
+/// stays readable when later versions add fields (with defaults) to the state.
+const CHECKPOINT_MAGIC: &[u8; 8] = b"RHEODEM2";
 
 fn io_err(path: &Path) -> impl FnOnce(std::io::Error) -> RunError + '_ {
     move |source| RunError::Io {
@@ -196,7 +198,7 @@ impl Run {
             .strip_prefix(CHECKPOINT_MAGIC.as_slice())
             .ok_or_else(|| bad("missing rheodem checkpoint header".into()))?;
         let (version, state): (String, Run) =
-            postcard::from_bytes(body).map_err(|e| bad(e.to_string()))?;
+            rmp_serde::from_slice(body).map_err(|e| bad(e.to_string()))?;
         if version != crate::VERSION {
             return Err(bad(format!(
                 "written by rheodem {version}, this is {}",
@@ -285,7 +287,7 @@ impl Run {
             .map_err(io_err(&path))?;
         let path = dir.join("checkpoint.bin");
         let mut bytes = CHECKPOINT_MAGIC.to_vec();
-        let body = postcard::to_stdvec(&(crate::VERSION.to_string(), self)).map_err(|e| {
+        let body = rmp_serde::to_vec_named(&(crate::VERSION.to_string(), self)).map_err(|e| {
             RunError::Checkpoint {
                 path: path.clone(),
                 reason: e.to_string(),

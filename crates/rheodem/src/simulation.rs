@@ -130,6 +130,7 @@ impl Simulation {
     /// under stress control, which needs `σ_yy` every step).
     pub fn compute_forces(&mut self, measure: bool) {
         let images = self.domain.image_transforms();
+        let flow = self.domain.contact_flow_rate();
         let (p, nb, laws, dt, scratch) = (
             &mut self.particles,
             &mut self.neighbors,
@@ -138,11 +139,11 @@ impl Simulation {
             &mut self.scratch,
         );
         let mut sums = if measure {
-            pair_forces::<MEASURE_ALL>(p, nb, laws, &images, dt, scratch)
+            pair_forces::<MEASURE_ALL>(p, nb, laws, &images, flow, dt, scratch)
         } else if self.stress_control.is_some() {
-            pair_forces::<MEASURE_STRESS>(p, nb, laws, &images, dt, scratch)
+            pair_forces::<MEASURE_STRESS>(p, nb, laws, &images, flow, dt, scratch)
         } else {
-            pair_forces::<MEASURE_NONE>(p, nb, laws, &images, dt, scratch)
+            pair_forces::<MEASURE_NONE>(p, nb, laws, &images, flow, dt, scratch)
         };
         for wall in &mut self.walls {
             let w = wall.apply(&mut self.particles, &self.laws, self.dt);

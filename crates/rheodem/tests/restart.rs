@@ -119,7 +119,7 @@ fn starting_over_an_existing_run_is_refused() {
 fn corrupt_checkpoint_is_an_error_not_a_panic() {
     let dir = temp_dir("corrupt");
     std::fs::create_dir_all(&dir).expect("dir");
-    std::fs::write(dir.join("checkpoint.bin"), b"RHEODEM1garbage").expect("write");
+    std::fs::write(dir.join("checkpoint.bin"), b"RHEODEM2garbage").expect("write");
     let err = Run::resume(&dir).expect_err("must fail");
     assert!(err.to_string().contains("not a usable checkpoint"));
     let _ = std::fs::remove_dir_all(dir);

@@ -176,15 +176,78 @@ fn malformed_scenarios_name_the_key_and_range() {
             ("seed = 3", "seed = 3\ngravity = [0.0, 0.0, nan]"),
             &["gravity", "finite"],
         ),
-        ("negative surface tension", ("mu = 0.5 }", "mu = 0.5 }\nadhesion = { law = \"liquid_bridge\", surface_tension = -0.02, contact_angle_deg = 20.0, volume = 75e-12 }"), &["contact[0].adhesion.surface_tension", "positive"]),
-        ("contact angle of 90 degrees", ("mu = 0.5 }", "mu = 0.5 }\nadhesion = { law = \"liquid_bridge\", surface_tension = 0.02, contact_angle_deg = 90.0, volume = 75e-12 }"), &["contact[0].adhesion.contact_angle_deg", "[0, 90)"]),
-        ("zero bridge volume", ("mu = 0.5 }", "mu = 0.5 }\nadhesion = { law = \"liquid_bridge\", surface_tension = 0.02, contact_angle_deg = 20.0, volume = 0.0 }"), &["contact[0].adhesion.volume", "rupture distance"]),
-        ("adhesion without stiffness or range", ("mu = 0.5 }", "mu = 0.5 }\nadhesion = { law = \"reversible\", max_force = 1e-4 }"), &["contact[0].adhesion.stiffness", "range"]),
-        ("adhesion with stiffness and range", ("mu = 0.5 }", "mu = 0.5 }\nadhesion = { law = \"linear_irreversible\", max_force = 1e-4, stiffness = 1.0, range = 1e-4 }"), &["contact[0].adhesion", "at most one"]),
-        ("negative adhesive force", ("mu = 0.5 }", "mu = 0.5 }\nadhesion = { law = \"reversible\", max_force = -1e-4, stiffness = 100.0 }"), &["contact[0].adhesion.max_force", "positive"]),
-        ("unknown adhesion law", ("mu = 0.5 }", "mu = 0.5 }\nadhesion = { law = \"glue\", max_force = 1e-4 }"), &["contact[0]", "glue"]),
-        ("shear without periodic y", ("periodic = [true, true, true]", "periodic = [true, false, true]\nshear_rate = 1.0"), &["domain.shear_rate", "periodic x and y"]),
-        ("stress control without shear", ("[run]", "[stress_control]\ntarget = 100.0\nmodulus = 4.5e4\ntime = 0.01\n[run]"), &["stress_control", "shear_rate"]),
+        (
+            "negative surface tension",
+            (
+                "mu = 0.5 }",
+                "mu = 0.5 }\nadhesion = { law = \"liquid_bridge\", surface_tension = -0.02, contact_angle_deg = 20.0, volume = 75e-12 }",
+            ),
+            &["contact[0].adhesion.surface_tension", "positive"],
+        ),
+        (
+            "contact angle of 90 degrees",
+            (
+                "mu = 0.5 }",
+                "mu = 0.5 }\nadhesion = { law = \"liquid_bridge\", surface_tension = 0.02, contact_angle_deg = 90.0, volume = 75e-12 }",
+            ),
+            &["contact[0].adhesion.contact_angle_deg", "[0, 90)"],
+        ),
+        (
+            "zero bridge volume",
+            (
+                "mu = 0.5 }",
+                "mu = 0.5 }\nadhesion = { law = \"liquid_bridge\", surface_tension = 0.02, contact_angle_deg = 20.0, volume = 0.0 }",
+            ),
+            &["contact[0].adhesion.volume", "rupture distance"],
+        ),
+        (
+            "adhesion without stiffness or range",
+            (
+                "mu = 0.5 }",
+                "mu = 0.5 }\nadhesion = { law = \"reversible\", max_force = 1e-4 }",
+            ),
+            &["contact[0].adhesion.stiffness", "range"],
+        ),
+        (
+            "adhesion with stiffness and range",
+            (
+                "mu = 0.5 }",
+                "mu = 0.5 }\nadhesion = { law = \"linear_irreversible\", max_force = 1e-4, stiffness = 1.0, range = 1e-4 }",
+            ),
+            &["contact[0].adhesion", "at most one"],
+        ),
+        (
+            "negative adhesive force",
+            (
+                "mu = 0.5 }",
+                "mu = 0.5 }\nadhesion = { law = \"reversible\", max_force = -1e-4, stiffness = 100.0 }",
+            ),
+            &["contact[0].adhesion.max_force", "positive"],
+        ),
+        (
+            "unknown adhesion law",
+            (
+                "mu = 0.5 }",
+                "mu = 0.5 }\nadhesion = { law = \"glue\", max_force = 1e-4 }",
+            ),
+            &["contact[0]", "glue"],
+        ),
+        (
+            "shear without periodic y",
+            (
+                "periodic = [true, true, true]",
+                "periodic = [true, false, true]\nshear_rate = 1.0",
+            ),
+            &["domain.shear_rate", "periodic x and y"],
+        ),
+        (
+            "stress control without shear",
+            (
+                "[run]",
+                "[stress_control]\ntarget = 100.0\nmodulus = 4.5e4\ntime = 0.01\n[run]",
+            ),
+            &["stress_control", "shear_rate"],
+        ),
     ];
     for (what, (from, to), needles) in cases {
         assert!(VALID.contains(from), "case `{what}`: pattern not in VALID");

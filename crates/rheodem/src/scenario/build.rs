@@ -12,8 +12,8 @@ use crate::generate::{
 use crate::io::packing::parse_packing;
 use crate::neighbor::NeighborError;
 use crate::particles::{Motion, Particles, Sphere};
-use crate::timestep::{DEFAULT_FRACTION, MAX_FRACTION, shortest_contact_time};
 use crate::stress_control::StressControl;
+use crate::timestep::{DEFAULT_FRACTION, MAX_FRACTION, shortest_contact_time};
 use crate::walls::PlaneWall;
 use glam::DVec3;
 use rand::SeedableRng;
@@ -878,9 +878,16 @@ pub fn build(s: &Scenario, base_dir: &Path) -> Result<Built, ScenarioError> {
             return Err(invalid("domain.shear_rate", rate, "must be finite (1/s)"));
         }
         if !(s.domain.periodic[0] && s.domain.periodic[1]) {
-            return Err(invalid("domain.shear_rate", rate, "Lees-Edwards shear needs periodic x and y"));
+            return Err(invalid(
+                "domain.shear_rate",
+                rate,
+                "Lees-Edwards shear needs periodic x and y",
+            ));
         }
         simulation.domain = simulation.domain.clone().with_lees_edwards(rate);
+        if let Some(le) = &mut simulation.domain.lees_edwards {
+            le.peculiar_contacts = s.domain.peculiar_contacts;
+        }
         let p = &mut simulation.particles;
         for i in 0..p.len() {
             if p.motion[i].is_free() {
@@ -891,7 +898,11 @@ pub fn build(s: &Scenario, base_dir: &Path) -> Result<Built, ScenarioError> {
     }
     if let Some(c) = &s.stress_control {
         if s.domain.shear_rate.is_none() {
-            return Err(invalid("stress_control", "(table)", "needs domain.shear_rate (a Lees-Edwards box)"));
+            return Err(invalid(
+                "stress_control",
+                "(table)",
+                "needs domain.shear_rate (a Lees-Edwards box)",
+            ));
         }
         simulation.set_stress_control(StressControl {
             target: positive("stress_control.target", c.target)?,

@@ -101,6 +101,10 @@ pub struct DomainSpec {
     /// periodic).
     #[serde(default)]
     pub shear_rate: Option<f64>,
+    /// Seed-code convention for comparison: contacts ignore the mean-flow difference in
+    /// their relative velocity (default false: the lab frame).
+    #[serde(default)]
+    pub peculiar_contacts: bool,
 }
 
 /// A material.

@@ -34,7 +34,11 @@ pub fn comparison_markdown(results: &[PointResult]) -> String {
     for r in results {
         let p = &r.spec;
         let Some(ss) = &r.steady_state else {
-            let _ = writeln!(s, "| {} | {} | {} | {} | {:?} | – | no rows | | | | | | | | | | | incomplete |", p.mu_p, p.inertial, p.softness, p.bond, p.cohesion);
+            let _ = writeln!(
+                s,
+                "| {} | {} | {} | {} | {:?} | – | no rows | | | | | | | | | | | incomplete |",
+                p.mu_p, p.inertial, p.softness, p.bond, p.cohesion
+            );
             continue;
         };
         let phi = ss.volume_fraction;
@@ -45,7 +49,11 @@ pub fn comparison_markdown(results: &[PointResult]) -> String {
         let phi_tol = if p.bond > 0.0 { 0.04 } else { 0.02 };
         let phi_dev = phi_seed.map(|f| phi.mean / f - 1.0);
         // The friction law is checked for non-cohesive points only (the list).
-        let mu_seed = if p.bond == 0.0 { mu_law.map(|l| l.mu(p.inertial, p.softness, 0.0)) } else { None };
+        let mu_seed = if p.bond == 0.0 {
+            mu_law.map(|l| l.mu(p.inertial, p.softness, 0.0))
+        } else {
+            None
+        };
         let mu_dev = mu_seed.map(|m| mu.mean / m - 1.0);
         let mut ok = ss.steady;
         let mut notes = Vec::new();
@@ -70,7 +78,11 @@ pub fn comparison_markdown(results: &[PointResult]) -> String {
                     let d = phi.mean - r0.volume_fraction.mean;
                     let e = (phi.error.powi(2) + r0.volume_fraction.error.powi(2)).sqrt();
                     dphi_txt = format!("{d:+.4} ± {e:.4}");
-                    let measured = if d.abs() > 2.0 * e { Some(d.signum()) } else { None };
+                    let measured = if d.abs() > 2.0 * e {
+                        Some(d.signum())
+                    } else {
+                        None
+                    };
                     let word = |x: f64| if x > 0.0 { "compression" } else { "dilation" };
                     match (measured, expected_sign(p.mu_p, p.bond)) {
                         (Some(m), Some(x)) => {
@@ -96,14 +108,35 @@ pub fn comparison_markdown(results: &[PointResult]) -> String {
         }
         let pct = |x: Option<f64>| x.map_or("–".to_string(), |v| format!("{:+.2} %", 100.0 * v));
         let num = |x: Option<f64>, d: usize| x.map_or("–".to_string(), |v| format!("{v:.d$}"));
-        let verdict = if ok { "pass".to_string() } else { format!("MISS {}", notes.join(", ")) };
+        let verdict = if ok {
+            "pass".to_string()
+        } else {
+            format!("MISS {}", notes.join(", "))
+        };
         let _ = writeln!(
             s,
             "| {} | {} | {} | {} | {:?} | {:.1}–{:.1} | {} | {:.4} ± {:.4} | {} | {} | {:.0} % | {:.4} ± {:.4} | {} | {} | {} | {} | {} | {} |",
-            p.mu_p, p.inertial, p.softness, p.bond, p.cohesion, ss.strain_window[0], ss.strain_window[1], ss.steady,
-            phi.mean, phi.error, num(phi_seed, 4), pct(phi_dev), 100.0 * phi_tol,
-            mu.mean, mu.error, num(mu_seed, 4), pct(mu_dev), if mu_seed.is_some() { "10 %" } else { "–" },
-            dphi_txt, sign_txt, verdict.trim()
+            p.mu_p,
+            p.inertial,
+            p.softness,
+            p.bond,
+            p.cohesion,
+            ss.strain_window[0],
+            ss.strain_window[1],
+            ss.steady,
+            phi.mean,
+            phi.error,
+            num(phi_seed, 4),
+            pct(phi_dev),
+            100.0 * phi_tol,
+            mu.mean,
+            mu.error,
+            num(mu_seed, 4),
+            pct(mu_dev),
+            if mu_seed.is_some() { "10 %" } else { "–" },
+            dphi_txt,
+            sign_txt,
+            verdict.trim()
         );
     }
     s

@@ -140,6 +140,10 @@ pub struct ShearBoxSpec {
     /// Checkpoints over the run.
     #[serde(default = "default_checkpoints")]
     pub checkpoints: u64,
+    /// Seed-code convention for comparison only: contact relative velocities exclude the
+    /// mean-flow difference (default false: lab frame, PHYSICS §3).
+    #[serde(default)]
+    pub peculiar_contacts: bool,
 }
 
 /// SI values derived from a [`ShearBoxSpec`].
@@ -185,16 +189,28 @@ impl ShearBoxSpec {
         in_range("restitution", self.restitution, 0.0, 1.0, true)?;
         in_range("polydispersity", self.polydispersity, 1.0, 20.0, false)?;
         if self.particles < 16 || self.particles > 10_000_000 {
-            return Err(invalid("particles", self.particles, "must lie in [16, 10000000]"));
+            return Err(invalid(
+                "particles",
+                self.particles,
+                "must lie in [16, 10000000]",
+            ));
         }
         let strain = in_range("strain", self.strain, 0.0, 1e6, true)?;
         if !(self.transient_strain >= 0.0 && self.transient_strain < strain) {
-            return Err(invalid("transient_strain", self.transient_strain, format!("must lie in [0, strain = {strain})")));
+            return Err(invalid(
+                "transient_strain",
+                self.transient_strain,
+                format!("must lie in [0, strain = {strain})"),
+            ));
         }
         in_range("control_time", self.control_time, 0.0, 1e6, true)?;
         in_range("rows_per_strain", self.rows_per_strain, 0.0, 1e6, true)?;
         if bo > 0.0 && self.cohesion == Cohesion::None {
-            return Err(invalid("cohesion", "\"none\"", "a positive bond number needs a cohesion law (reversible, liquid_bridge, linear_irreversible)"));
+            return Err(invalid(
+                "cohesion",
+                "\"none\"",
+                "a positive bond number needs a cohesion law (reversible, liquid_bridge, linear_irreversible)",
+            ));
         }
         let p = ps * k / d;
         let shear_rate = i * (p / rho).sqrt() / d;
@@ -216,7 +232,11 @@ impl ShearBoxSpec {
         let w = self.polydispersity;
         // Mean particle volume of radii uniform in [r1, r2].
         let (r1, r2) = (d / (1.0 + w), w * d / (1.0 + w));
-        let mean_r3 = if r2 > r1 { (r2.powi(4) - r1.powi(4)) / (4.0 * (r2 - r1)) } else { r1.powi(3) };
+        let mean_r3 = if r2 > r1 {
+            (r2.powi(4) - r1.powi(4)) / (4.0 * (r2 - r1))
+        } else {
+            r1.powi(3)
+        };
         let solid = self.particles as f64 * 4.0 / 3.0 * PI * mean_r3;
         let edge = (solid / 0.3).cbrt();
         let adhesion = if self.bond == 0.0 {
@@ -258,7 +278,13 @@ impl ShearBoxSpec {
         Ok(Scenario {
             title: Some(format!(
                 "shear box: mu_p = {}, I = {}, p* = {}, Bo = {} ({:?}), w = {}, N = {}",
-                self.mu_p, self.inertial, self.softness, self.bond, self.cohesion, w, self.particles
+                self.mu_p,
+                self.inertial,
+                self.softness,
+                self.bond,
+                self.cohesion,
+                w,
+                self.particles
             )),
             seed: self.seed,
             domain: DomainSpec {
@@ -266,8 +292,12 @@ impl ShearBoxSpec {
                 size: Some([edge; 3]),
                 periodic: [true; 3],
                 shear_rate: Some(dv.shear_rate),
+                peculiar_contacts: self.peculiar_contacts,
             },
-            species: vec![SpeciesSpec { name: "grain".into(), density: self.density }],
+            species: vec![SpeciesSpec {
+                name: "grain".into(),
+                density: self.density,
+            }],
             contacts: vec![ContactSpec {
                 species: None,
                 normal: NormalSpec {
@@ -296,8 +326,17 @@ impl ShearBoxSpec {
                 strain_per_contact_time: None,
                 relax_contact_times: Some(50.0),
             }),
-            run: RunSpec { duration: Some(dv.duration), steps: None, dt: None, dt_fraction: None },
-            output: OutputSpec { timeseries_rows: rows, snapshots: self.snapshots, checkpoints: self.checkpoints },
+            run: RunSpec {
+                duration: Some(dv.duration),
+                steps: None,
+                dt: None,
+                dt_fraction: None,
+            },
+            output: OutputSpec {
+                timeseries_rows: rows,
+                snapshots: self.snapshots,
+                checkpoints: self.checkpoints,
+            },
             neighbor: NeighborSpec::default(),
             stress_control: Some(StressControlSpec {
                 target: dv.pressure,
@@ -346,21 +385,38 @@ pub struct SteadyState {
 /// Averages the rows past `transient_strain` (the strain of a row is `γ̇ t`). Steady when
 /// at least 2 strain units are averaged and, for both φ and μ, the two halves of the window
 /// agree within three combined standard errors (or within 0.2 % for φ and 2 % for μ).
-pub fn steady_state(rows: &[Observables], spec: &ShearBoxSpec, dv: &Derived) -> Option<SteadyState> {
-    let window: Vec<&Observables> = rows.iter().filter(|o| o.time * dv.shear_rate >= spec.transient_strain).collect();
+pub fn steady_state(
+    rows: &[Observables],
+    spec: &ShearBoxSpec,
+    dv: &Derived,
+) -> Option<SteadyState> {
+    let window: Vec<&Observables> = rows
+        .iter()
+        .filter(|o| o.time * dv.shear_rate >= spec.transient_strain)
+        .collect();
     if window.len() < 8 {
         return None;
     }
-    let series = |f: &dyn Fn(&Observables) -> f64| window.iter().map(|o| f(o)).collect::<Vec<f64>>();
+    let series =
+        |f: &dyn Fn(&Observables) -> f64| window.iter().map(|o| f(o)).collect::<Vec<f64>>();
     let phi = series(&|o| o.volume_fraction);
-    let mu = series(&|o| if o.stress[1][1] != 0.0 { o.stress[0][1].abs() / o.stress[1][1] } else { 0.0 });
+    let mu = series(&|o| {
+        if o.stress[1][1] != 0.0 {
+            o.stress[0][1].abs() / o.stress[1][1]
+        } else {
+            0.0
+        }
+    });
     let est = |x: &[f64]| block_average(x).expect("window has ≥ 8 rows");
     let first = window[0].time * dv.shear_rate;
     let last = window[window.len() - 1].time * dv.shear_rate;
     let sigma_yy = est(&series(&|o| o.stress[1][1]));
     let mut notes = Vec::new();
     if last - first < 2.0 {
-        notes.push(format!("only {:.2} strain units past the transient", last - first));
+        notes.push(format!(
+            "only {:.2} strain units past the transient",
+            last - first
+        ));
     }
     if !halves_agree(&phi, 2e-3) {
         notes.push("volume fraction still drifting".to_string());
@@ -384,6 +440,10 @@ pub fn steady_state(rows: &[Observables], spec: &ShearBoxSpec, dv: &Derived) -> 
         bridges_per_particle: est(&series(&|o| o.bridges_per_particle)),
         inertial_measured: dv.shear_rate * spec.diameter / (p / spec.density).sqrt(),
         softness_measured: p * spec.diameter / spec.stiffness,
-        bond_measured: if p > 0.0 { dv.max_force / (p * spec.diameter * spec.diameter) } else { 0.0 },
+        bond_measured: if p > 0.0 {
+            dv.max_force / (p * spec.diameter * spec.diameter)
+        } else {
+            0.0
+        },
     })
 }

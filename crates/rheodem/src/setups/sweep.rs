@@ -48,11 +48,15 @@ pub fn expand(spec: &SweepSpec) -> Result<Vec<(String, ShearBoxSpec)>, ScenarioE
     if !spec.grid.is_empty() {
         let mut combos = vec![toml::Table::new()];
         for (key, values) in &spec.grid {
-            let list = values
-                .as_array()
-                .ok_or_else(|| invalid(format!("grid.{key}"), values, "must be a list of values"))?;
+            let list = values.as_array().ok_or_else(|| {
+                invalid(format!("grid.{key}"), values, "must be a list of values")
+            })?;
             if list.is_empty() {
-                return Err(invalid(format!("grid.{key}"), "[]", "must list at least one value"));
+                return Err(invalid(
+                    format!("grid.{key}"),
+                    "[]",
+                    "must list at least one value",
+                ));
             }
             combos = combos
                 .into_iter()
@@ -76,15 +80,34 @@ pub fn expand(spec: &SweepSpec) -> Result<Vec<(String, ShearBoxSpec)>, ScenarioE
         let mut t = spec.base.clone();
         t.extend(extra);
         let text = toml::to_string(&t).unwrap_or_default();
-        let point: ShearBoxSpec = toml::from_str(&text).map_err(|e| ScenarioError::Parse(format!("sweep point {k}: {e}")))?;
-        point.derive().map_err(|e| ScenarioError::Parse(format!("sweep point {k}: {e}")))?;
+        let point: ShearBoxSpec = toml::from_str(&text)
+            .map_err(|e| ScenarioError::Parse(format!("sweep point {k}: {e}")))?;
+        point
+            .derive()
+            .map_err(|e| ScenarioError::Parse(format!("sweep point {k}: {e}")))?;
         let name = format!(
             "mu{}_I{}_p{}_Bo{}_{:?}_w{}_N{}_s{}",
-            point.mu_p, point.inertial, point.softness, point.bond, point.cohesion, point.polydispersity, point.particles, point.seed
+            point.mu_p,
+            point.inertial,
+            point.softness,
+            point.bond,
+            point.cohesion,
+            point.polydispersity,
+            point.particles,
+            point.seed
         )
-        .to_lowercase();
+        .to_lowercase()
+            + if point.peculiar_contacts {
+                "_peculiar"
+            } else {
+                ""
+            };
         if out.iter().any(|(n, _)| *n == name) {
-            return Err(invalid(format!("point {k}"), name, "duplicates an earlier point"));
+            return Err(invalid(
+                format!("point {k}"),
+                name,
+                "duplicates an earlier point",
+            ));
         }
         out.push((name, point));
     }
@@ -108,7 +131,13 @@ pub struct PointResult {
 
 /// Runs (or resumes, or skips when finished) one point in `dir` with the current rayon
 /// pool, writing `steady_state.json` at the end.
-pub fn run_point(name: &str, spec: &ShearBoxSpec, dir: &Path, threads: usize, progress: &mut dyn FnMut(u64, u64)) -> Result<PointResult, RunError> {
+pub fn run_point(
+    name: &str,
+    spec: &ShearBoxSpec,
+    dir: &Path,
+    threads: usize,
+    progress: &mut dyn FnMut(u64, u64),
+) -> Result<PointResult, RunError> {
     let result_path = dir.join("steady_state.json");
     if let Ok(text) = std::fs::read_to_string(&result_path) {
         if let Ok(done) = serde_json::from_str::<PointResult>(&text) {
@@ -132,7 +161,10 @@ pub fn run_point(name: &str, spec: &ShearBoxSpec, dir: &Path, threads: usize, pr
         wall_seconds: run.wall_seconds,
     };
     let json = serde_json::to_string_pretty(&result).unwrap_or_default();
-    write_atomic(&result_path, json.as_bytes()).map_err(|source| RunError::Io { path: result_path.clone(), source })?;
+    write_atomic(&result_path, json.as_bytes()).map_err(|source| RunError::Io {
+        path: result_path.clone(),
+        source,
+    })?;
     Ok(result)
 }
 
@@ -148,23 +180,53 @@ pub fn results_csv(results: &[PointResult]) -> String {
         let _ = write!(
             s,
             "{},{},{},{},{},{:?},{},{},{},{},{:e},{:e},",
-            r.name, p.mu_p, p.inertial, p.softness, p.bond, p.cohesion, p.range, p.polydispersity, p.particles, p.seed,
-            r.derived.pressure, r.derived.shear_rate
+            r.name,
+            p.mu_p,
+            p.inertial,
+            p.softness,
+            p.bond,
+            p.cohesion,
+            p.range,
+            p.polydispersity,
+            p.particles,
+            p.seed,
+            r.derived.pressure,
+            r.derived.shear_rate
         );
         match &r.steady_state {
             Some(ss) => {
                 let _ = writeln!(
                     s,
                     "{},{:.3},{:.3},{:.6},{:.6},{:.5},{:.5},{:.4},{:.4},{:.6e},{:.3e},{:.6e},{:.3e},{:.4e},{:.5},{:.5},{:.5},{:.5},{:.5},{:.1},\"{}\"",
-                    ss.steady, ss.strain_window[0], ss.strain_window[1], ss.volume_fraction.mean, ss.volume_fraction.error,
-                    ss.friction.mean, ss.friction.error, ss.coordination.mean, ss.coordination.error, ss.sigma_yy.mean,
-                    ss.sigma_yy.error, ss.mean_stress.mean, ss.mean_stress.error, ss.granular_temperature.mean,
-                    ss.sliding_fraction.mean, ss.bridges_per_particle.mean, ss.inertial_measured, ss.softness_measured,
-                    ss.bond_measured, r.wall_seconds, ss.note
+                    ss.steady,
+                    ss.strain_window[0],
+                    ss.strain_window[1],
+                    ss.volume_fraction.mean,
+                    ss.volume_fraction.error,
+                    ss.friction.mean,
+                    ss.friction.error,
+                    ss.coordination.mean,
+                    ss.coordination.error,
+                    ss.sigma_yy.mean,
+                    ss.sigma_yy.error,
+                    ss.mean_stress.mean,
+                    ss.mean_stress.error,
+                    ss.granular_temperature.mean,
+                    ss.sliding_fraction.mean,
+                    ss.bridges_per_particle.mean,
+                    ss.inertial_measured,
+                    ss.softness_measured,
+                    ss.bond_measured,
+                    r.wall_seconds,
+                    ss.note
                 );
             }
             None => {
-                let _ = writeln!(s, "false,,,,,,,,,,,,,,,,,,,,{:.1},\"too few rows\"", r.wall_seconds);
+                let _ = writeln!(
+                    s,
+                    "false,,,,,,,,,,,,,,,,,,,,{:.1},\"too few rows\"",
+                    r.wall_seconds
+                );
             }
         }
     }
@@ -173,6 +235,8 @@ pub fn results_csv(results: &[PointResult]) -> String {
 
 /// Default output directory of a sweep file.
 pub fn default_out(path: &Path) -> PathBuf {
-    let stem = path.file_stem().map_or("sweep".into(), |s| s.to_string_lossy().into_owned());
+    let stem = path
+        .file_stem()
+        .map_or("sweep".into(), |s| s.to_string_lossy().into_owned());
     Path::new("runs").join(stem)
 }
