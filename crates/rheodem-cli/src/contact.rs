@@ -255,7 +255,10 @@ fn equivalent(a: EquivalentArgs) -> Result<()> {
     if !(a.diameter > 0.0 && d_j > 0.0) {
         bail!("--diameter and --diameter-j must be positive");
     }
-    if !(a.surface_tension >= 0.0) || !(0.0..90.0).contains(&a.contact_angle_deg) {
+    if a.surface_tension.is_nan()
+        || a.surface_tension < 0.0
+        || !(0.0..90.0).contains(&a.contact_angle_deg)
+    {
         bail!("--surface-tension must be ≥ 0 and --contact-angle-deg in [0, 90)");
     }
     println!(

@@ -95,6 +95,9 @@ enum Command {
         /// Verlet skin (model units; the LAMMPS input uses 0.2).
         #[arg(long, default_value_t = rheodem::bench::DEFAULT_SKIN)]
         skin: f64,
+        /// Also hold σ_yy at 185 (the LAMMPS steady pressure) by rescaling L_y.
+        #[arg(long)]
+        stress_control: bool,
         /// Cohesion variants to measure (default: all three).
         #[arg(long, value_enum, value_delimiter = ',')]
         cohesion: Vec<BenchCohesionArg>,
@@ -236,6 +239,7 @@ fn run(cli: Cli) -> Result<()> {
             warmup,
             steps,
             skin,
+            stress_control,
             cohesion,
         } => {
             if !(skin.is_finite() && skin > 0.0) {
@@ -271,6 +275,9 @@ fn run(cli: Cli) -> Result<()> {
                     let (pool, n) = pool(Some(n))?;
                     let r = pool.install(|| {
                         let mut sim = rheodem::bench::standard_problem(1.0, cohesion, skin);
+                        if stress_control {
+                            rheodem::bench::add_stress_control(&mut sim, 185.0);
+                        }
                         rheodem::bench::run_timed(&mut sim, warmup, steps)
                     });
                     let total = r.loop_time.as_secs_f64();

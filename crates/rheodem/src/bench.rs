@@ -124,6 +124,17 @@ pub fn standard_problem(shear_rate: f64, cohesion: BenchCohesion, skin: f64) -> 
     .expect("the standard problem's box is large enough")
 }
 
+/// Puts the standard problem under `σ_yy` control at `target` (model units), with the
+/// contact modulus `k_n / d = 10⁴` and a relaxation time of 40 `t_k` (`t_k = 0.01`).
+pub fn add_stress_control(sim: &mut Simulation, target: f64) {
+    sim.set_stress_control(crate::stress_control::StressControl {
+        target,
+        modulus: 1.0e4,
+        time: 0.4,
+        max_strain_per_step: 1e-4,
+    });
+}
+
 /// Timing of a benchmark run.
 #[derive(Clone, Debug)]
 pub struct BenchReport {

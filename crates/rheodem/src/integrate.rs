@@ -68,3 +68,45 @@ pub fn add_gravity(p: &mut Particles, g: DVec3) {
             }
         });
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::particles::Sphere;
+
+    #[test]
+    fn rotating_particle_follows_the_rigid_rotation() {
+        let mut p = Particles::default();
+        let center = DVec3::new(1.0, 2.0, 0.0);
+        let omega = 0.7;
+        p.push(
+            Sphere {
+                position: center + DVec3::new(3.0, 0.0, 5.0),
+                velocity: DVec3::ZERO,
+                angular_velocity: DVec3::ZERO,
+                radius: 0.1,
+                species: 0,
+                motion: Motion::Rotating {
+                    center,
+                    axis: DVec3::Z,
+                    omega,
+                },
+            },
+            1.0,
+        );
+        let dt = 1e-3;
+        for _ in 0..1000 {
+            drift(&mut p, dt);
+        }
+        // After t = 1: angle 0.7 rad about z through `center`; height unchanged.
+        let expected = center + DVec3::new(3.0 * omega.cos(), 3.0 * omega.sin(), 5.0);
+        assert!((p.position[0] - expected).length() < 1e-12);
+        let v = DVec3::Z.cross(p.position[0] - center) * omega;
+        assert!((p.velocity[0] - v).length() < 1e-15);
+        assert_eq!(p.angular_velocity[0], DVec3::Z * omega);
+        // Kicks never move a prescribed particle.
+        p.force[0] = DVec3::ONE;
+        kick(&mut p, 1.0);
+        assert!((p.velocity[0] - v).length() < 1e-15);
+    }
+}

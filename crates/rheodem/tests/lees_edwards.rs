@@ -10,7 +10,9 @@
 //!   damped law with rolling and torsion, and for a damped normal law alone, both for grains
 //!   moving with the mean flow (relative velocity across the boundary small) and for grains
 //!   at rest in the lab (relative velocity `−γ̇ L_y`); over a whole collision with list
-//!   rebuilds and a crossing in between.
+//!   rebuilds and a crossing in between; in the lab-frame convention and in the seed-code
+//!   comparison option `peculiar_contacts` (contacts subtract `γ̇ l_y x̂`, `l` the branch
+//!   vector through the image).
 //! * **Newton's third law.** The total force on the free particles of a sheared dense box is
 //!   zero to rounding; `Σ m (v_x − γ̇ (y − lo_y))`, `Σ m v_y`, `Σ m v_z` are conserved to
 //!   rounding (the plain `Σ m v_x` jumps by `m γ̇ L_y` at every crossing; that is no error).
@@ -246,10 +248,13 @@ fn pair_across_moving_boundary_matches_pair_inside() {
     ];
     let mut worst = (0.0f64, 0.0f64, 0.0f64, 0.0f64);
     let mut codes = HashSet::new();
-    for (name, law) in laws {
+    for ((name, law), peculiar) in laws.into_iter().flat_map(|l| [(l, false), (l, true)]) {
         let dt = contact_time(&law, A_REF) / 50.0;
         for (k, fraction) in [0.37, 0.8].into_iter().enumerate() {
-            let domain = sheared_box(fraction);
+            let mut domain = sheared_box(fraction);
+            if let Some(le) = &mut domain.lees_edwards {
+                le.peculiar_contacts = peculiar;
+            }
             for motion in [Motion::MeanFlow, Motion::LabRest] {
                 for (m, place) in [Placement::Middle, Placement::AcrossX, Placement::AcrossZ]
                     .into_iter()
@@ -263,10 +268,15 @@ fn pair_across_moving_boundary_matches_pair_inside() {
                     let (f0, t0, fm, tm) = record_error(&across[..1], &inside[..1]);
                     let (ef, et, _, _) = record_error(&across, &inside);
                     eprintln!(
-                        "[{name}] s = {:+.3} L_x, {motion:?}, {place:?}: \
+                        "[{name}{}] s = {:+.3} L_x, {motion:?}, {place:?}: \
                          first evaluation |ΔF|/F = {f0:.2e}, |ΔT|/T = {t0:.2e}; \
                          200 steps |ΔF|/F_max = {ef:.2e}, |ΔT|/T_max = {et:.2e} \
                          (F_max = {fm:.3e} N, T_max = {tm:.3e} N m)",
+                        if peculiar {
+                            ", seed-code peculiar contacts"
+                        } else {
+                            ""
+                        },
                         shift(&domain) / SIZE.x
                     );
                     assert!(fm > 0.0, "the pair must be in contact");

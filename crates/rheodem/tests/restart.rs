@@ -1,5 +1,6 @@
 //! Checkpoint and resume: a run stopped at a checkpoint and resumed from disk ends in the
-//! same state, bit for bit, as an uninterrupted run; the same seed reproduces a run.
+//! same state, bit for bit, as an uninterrupted run; the same seed reproduces a run. The
+//! particles are wet (Willett bridges), so open bridges must survive the checkpoint.
 
 use rheodem::run::Run;
 use rheodem::scenario::Scenario;
@@ -18,6 +19,7 @@ normal = { stiffness = 100.0, restitution = 0.8 }
 friction = { stiffness_ratio = 0.2857, damping_ratio = 0.2857, mu = 0.5 }
 rolling = { stiffness_ratio = 0.2857, damping_ratio = 0.2857, mu = 0.1 }
 torsion = { stiffness_ratio = 0.2857, damping_ratio = 0.2857, mu = 0.1 }
+adhesion = { law = "liquid_bridge", surface_tension = 0.02, contact_angle_deg = 20.0, volume = 75e-12 }
 [[particles]]
 kind = "random"
 species = "glass"
@@ -81,6 +83,9 @@ fn resumed_run_is_bit_identical() {
     drop(first);
     let mut resumed = Run::resume(&split_dir).expect("checkpoint readable");
     assert_eq!(resumed.simulation.step, 1500);
+    // The checkpoint holds open bridges (pairs apart that still attract).
+    let open = resumed.rows.last().map_or(0.0, |o| o.bridges_per_particle);
+    assert!(open > 0.0, "the test needs open bridges at the checkpoint");
     resumed.advance(&split_dir, |_, _| {}).expect("run");
 
     let (a, csv_a) = fingerprint(&whole);

@@ -139,12 +139,12 @@ pub fn run_point(
     progress: &mut dyn FnMut(u64, u64),
 ) -> Result<PointResult, RunError> {
     let result_path = dir.join("steady_state.json");
-    if let Ok(text) = std::fs::read_to_string(&result_path) {
-        if let Ok(done) = serde_json::from_str::<PointResult>(&text) {
-            if done.spec == *spec {
-                return Ok(done);
-            }
-        }
+    let finished = std::fs::read_to_string(&result_path)
+        .ok()
+        .and_then(|text| serde_json::from_str::<PointResult>(&text).ok())
+        .filter(|done| done.spec == *spec);
+    if let Some(done) = finished {
+        return Ok(done);
     }
     let derived = spec.derive()?;
     let mut run = if dir.join("checkpoint.bin").exists() {
