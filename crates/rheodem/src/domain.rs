@@ -247,11 +247,15 @@ impl Domain {
         }
     }
 
-    /// Scales the box along `y` about its lower corner by `factor`, with the `y` coordinates
-    /// and `y` velocities (the mean flow has no `y` component).
+    /// Scales the box along `y` about its lower corner by `factor`, with the `y` coordinates;
+    /// velocities relative to the mean flow are scaled along `y` and kept along `x` (the mean
+    /// flow `γ̇ (y − lo_y)` follows the moved coordinate).
     pub fn scale_y(&mut self, factor: f64, positions: &mut [DVec3], velocities: &mut [DVec3]) {
+        let rate = self.lees_edwards.map_or(0.0, |le| le.shear_rate);
         for (r, v) in positions.iter_mut().zip(velocities.iter_mut()) {
-            r.y = self.lo.y + (r.y - self.lo.y) * factor;
+            let dy = (r.y - self.lo.y) * (factor - 1.0);
+            r.y += dy;
+            v.x += rate * dy;
             v.y *= factor;
         }
         self.hi.y = self.lo.y + (self.hi.y - self.lo.y) * factor;

@@ -10,8 +10,9 @@
 //! Displacements are measured relative to the box's affine motion since the build (the
 //! mean shear flow of Lees-Edwards boundaries, a compression or dilation): with `A` that
 //! affine map minus the identity, `d_i` the non-affine displacements and `r_c` the largest
-//! interaction cutoff, a pair outside the list can have come within reach only once
-//! `(1 + ‖A‖)(d_1 + d_2) + ‖A‖ r_c ≥ skin`, `d_1`, `d_2` the two largest `|d_i|`. Under
+//! interaction cutoff, a pair outside the list (at least `r_c + skin` apart at the build)
+//! can have come within reach only once `(1 + ‖A‖)(d_1 + d_2) + ‖A‖ (r_c + skin) ≥ skin`,
+//! `d_1`, `d_2` the two largest `|d_i|`. Under
 //! steady shear this rebuilds far less often than lab-frame displacement, which counts the
 //! mean flow itself.
 
@@ -130,7 +131,8 @@ impl NeighborList {
                 }
             }
         }
-        (1.0 + norm) * (first.sqrt() + second.sqrt()) + norm * self.interaction_cutoff >= self.skin
+        (1.0 + norm) * (first.sqrt() + second.sqrt()) + norm * (self.interaction_cutoff + self.skin)
+            >= self.skin
     }
 
     /// Rebuilds the list: wraps positions into the box, re-sorts particles by cell, finds all
