@@ -27,5 +27,10 @@ pub mod walls;
 
 pub use simulation::Simulation;
 
-/// Version of the program, recorded in every output.
+/// Version of the program, recorded in every output; checkpoints resume only under the
+/// same version.
 pub const VERSION: &str = env!("CARGO_PKG_VERSION");
+
+/// Git commit the program was built from (`+dirty` with uncommitted changes), recorded in
+/// every output for provenance.
+pub const COMMIT: &str = env!("RHEODEM_COMMIT");

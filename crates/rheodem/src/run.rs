@@ -114,6 +114,7 @@ pub struct Run {
 struct Summary<'a> {
     program: &'static str,
     version: &'static str,
+    commit: &'static str,
     seed: u64,
     status: Status,
     steps_done: u64,
@@ -171,8 +172,9 @@ impl Run {
             wall_seconds: 0.0,
         };
         let header = format!(
-            "# rheodem {} — scenario as run, every default written out; seed {}\n",
+            "# rheodem {} (commit {}) — scenario as run, every default written out; seed {}\n",
             crate::VERSION,
+            crate::COMMIT,
             run.scenario.seed
         );
         let path = dir.join("scenario.toml");
@@ -303,6 +305,7 @@ impl Run {
         let summary = Summary {
             program: "rheodem",
             version: crate::VERSION,
+            commit: crate::COMMIT,
             seed: self.scenario.seed,
             status,
             steps_done: done,

@@ -25,6 +25,9 @@ use std::path::Path;
 pub struct Resolved {
     /// Program version.
     pub version: String,
+    /// Git commit of the build.
+    #[serde(default)]
+    pub commit: String,
     /// Seed of the run.
     pub seed: u64,
     /// Time step (s).
@@ -914,6 +917,7 @@ pub fn build(s: &Scenario, base_dir: &Path) -> Result<Built, ScenarioError> {
     let obs = simulation.observables();
     let resolved = Resolved {
         version: crate::VERSION.to_string(),
+        commit: crate::COMMIT.to_string(),
         seed: s.seed,
         dt,
         contact_time: t_c,

@@ -127,6 +127,9 @@ pub struct PointResult {
     pub steady_state: Option<SteadyState>,
     /// Wall-clock seconds of the run (all sessions).
     pub wall_seconds: f64,
+    /// Git commit of the build that finished the point.
+    #[serde(default)]
+    pub commit: String,
 }
 
 /// Runs (or resumes, or skips when finished) one point in `dir` with the current rayon
@@ -159,6 +162,7 @@ pub fn run_point(
         derived,
         steady_state: steady_state(&run.rows, spec, &derived),
         wall_seconds: run.wall_seconds,
+        commit: crate::COMMIT.to_string(),
     };
     let json = serde_json::to_string_pretty(&result).unwrap_or_default();
     write_atomic(&result_path, json.as_bytes()).map_err(|source| RunError::Io {
