@@ -20,6 +20,7 @@ use crate::contact::ContactHistory;
 use crate::domain::{Domain, IDENTITY_IMAGE, image_code};
 use crate::particles::Particles;
 use glam::{DMat3, DVec3};
+use rayon::prelude::*;
 use rustc_hash::FxHashMap;
 use serde::{Deserialize, Serialize};
 
@@ -40,6 +41,9 @@ pub enum NeighborError {
         cutoff: f64,
     },
 }
+
+/// Particles per block of the parallel neighbour build.
+const BUILD_BLOCK: usize = 256;
 
 /// Verlet list with contact history.
 #[derive(Clone, Debug, Default, Serialize, Deserialize)]
@@ -119,18 +123,28 @@ impl NeighborList {
             + affine.y_axis.length_squared()
             + affine.z_axis.length_squared())
         .sqrt();
-        let (mut first, mut second) = (0.0f64, 0.0f64);
-        for (r, r0) in particles.position.iter().zip(&self.reference_position) {
-            let d = (*r - *r0 - affine * (*r0 - self.reference_lo)).length_squared();
-            if d > second {
-                if d > first {
-                    second = first;
-                    first = d;
-                } else {
-                    second = d;
-                }
+        // The two largest non-affine displacements (squared); max is order-independent, so
+        // the parallel reduction is deterministic.
+        let lo = self.reference_lo;
+        let top2 = |a: (f64, f64), d: f64| {
+            if d > a.0 {
+                (d, a.0)
+            } else if d > a.1 {
+                (a.0, d)
+            } else {
+                a
             }
-        }
+        };
+        let (first, second) = particles
+            .position
+            .par_iter()
+            .zip(self.reference_position.par_iter())
+            .with_min_len(1024)
+            .fold(
+                || (0.0f64, 0.0f64),
+                |acc, (r, r0)| top2(acc, (*r - *r0 - affine * (*r0 - lo)).length_squared()),
+            )
+            .reduce(|| (0.0, 0.0), |a, b| top2(top2(a, b.0), b.1));
         (1.0 + norm) * (first.sqrt() + second.sqrt()) + norm * (self.interaction_cutoff + self.skin)
             >= self.skin
     }
@@ -182,20 +196,32 @@ impl NeighborList {
         self.active = vec![false; self.partner.len()];
         self.history = vec![ContactHistory::default(); self.partner.len()];
         if !old.is_empty() {
-            for i in 0..particles.len() {
-                let id_i = particles.id[i];
-                for k in self.offsets[i] as usize..self.offsets[i + 1] as usize {
-                    let id_j = particles.id[self.partner[k] as usize];
-                    let found = if id_i < id_j {
-                        old.get(&(id_i, id_j)).copied()
-                    } else {
-                        old.get(&(id_j, id_i)).map(ContactHistory::flipped)
-                    };
-                    if let Some(h) = found {
-                        self.active[k] = true;
-                        self.history[k] = h;
-                    }
-                }
+            let (offsets, partner, ids) = (&self.offsets, &self.partner, &particles.id);
+            let restored: Vec<Vec<(usize, ContactHistory)>> =
+                (0..particles.len().div_ceil(BUILD_BLOCK))
+                    .into_par_iter()
+                    .map(|b| {
+                        let mut found = Vec::new();
+                        for i in b * BUILD_BLOCK..((b + 1) * BUILD_BLOCK).min(particles.len()) {
+                            let id_i = ids[i];
+                            for k in offsets[i] as usize..offsets[i + 1] as usize {
+                                let id_j = ids[partner[k] as usize];
+                                let h = if id_i < id_j {
+                                    old.get(&(id_i, id_j)).copied()
+                                } else {
+                                    old.get(&(id_j, id_i)).map(ContactHistory::flipped)
+                                };
+                                if let Some(h) = h {
+                                    found.push((k, h));
+                                }
+                            }
+                        }
+                        found
+                    })
+                    .collect();
+            for (k, h) in restored.into_iter().flatten() {
+                self.active[k] = true;
+                self.history[k] = h;
             }
         }
 
@@ -232,20 +258,18 @@ impl NeighborList {
         map
     }
 
+    /// Finds every pair within cutoff, rows in blocks of particles searched in parallel and
+    /// concatenated in slot order (so the list does not depend on the thread count).
     fn find_pairs(&mut self, particles: &Particles, grid: &CellGrid, start: &[u32]) {
         let n = particles.len();
-        self.offsets.clear();
-        self.partner.clear();
-        self.image.clear();
-        self.offsets.reserve(n + 1);
-        self.offsets.push(0);
         let pos = &particles.position;
         let rad = &particles.radius;
         let free: Vec<bool> = particles.motion.iter().map(|m| m.is_free()).collect();
         let reach = self.range + self.skin;
         let lengths = grid.lengths;
         let le_shift = grid.shear_shift;
-        for i in 0..n {
+        let row_of = |i: usize, row: &mut Vec<(u32, u8)>| {
+            row.clear();
             let ci = grid.cell_coords(pos[i]);
             for dz in -1..=1 {
                 for dy in -1..=1 {
@@ -267,26 +291,41 @@ impl NeighborList {
                             let cut = rad[i] + rad[j] + reach;
                             let d = pos[i] - (pos[j] + shift);
                             if d.length_squared() < cut * cut {
-                                self.partner.push(j as u32);
-                                self.image.push(code);
+                                row.push((j as u32, code));
                             }
                         }
                     }
                 }
             }
             // Partners sorted by slot for a predictable memory walk.
-            let row = *self.offsets.last().unwrap_or(&0) as usize;
-            let mut pairs: Vec<(u32, u8)> = self.partner[row..]
-                .iter()
-                .copied()
-                .zip(self.image[row..].iter().copied())
-                .collect();
-            pairs.sort_unstable();
-            for (k, (j, c)) in pairs.into_iter().enumerate() {
-                self.partner[row + k] = j;
-                self.image[row + k] = c;
+            row.sort_unstable();
+        };
+        let blocks: Vec<(Vec<u32>, Vec<u32>, Vec<u8>)> = (0..n.div_ceil(BUILD_BLOCK))
+            .into_par_iter()
+            .map(|b| {
+                let (mut lens, mut partner, mut image) = (Vec::new(), Vec::new(), Vec::new());
+                let mut row = Vec::new();
+                for i in b * BUILD_BLOCK..((b + 1) * BUILD_BLOCK).min(n) {
+                    row_of(i, &mut row);
+                    lens.push(row.len() as u32);
+                    partner.extend(row.iter().map(|p| p.0));
+                    image.extend(row.iter().map(|p| p.1));
+                }
+                (lens, partner, image)
+            })
+            .collect();
+        self.offsets.clear();
+        self.partner.clear();
+        self.image.clear();
+        self.offsets.reserve(n + 1);
+        self.offsets.push(0);
+        for (lens, partner, image) in blocks {
+            for len in lens {
+                let last = *self.offsets.last().unwrap_or(&0);
+                self.offsets.push(last + len);
             }
-            self.offsets.push(self.partner.len() as u32);
+            self.partner.extend(partner);
+            self.image.extend(image);
         }
     }
 
