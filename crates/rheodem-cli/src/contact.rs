@@ -36,6 +36,7 @@ pub enum LawName {
 
 /// Arguments of `contact curve`.
 #[derive(Args)]
+#[command(allow_negative_numbers = true)]
 pub struct CurveArgs {
     /// Take the law from this scenario file (with --pair); otherwise from the flags below.
     #[arg(long)]
@@ -83,6 +84,7 @@ pub struct CurveArgs {
 
 /// Arguments of `contact equivalent`.
 #[derive(Args)]
+#[command(allow_negative_numbers = true)]
 pub struct EquivalentArgs {
     /// Surface tension γ_s (N/m).
     #[arg(long, default_value_t = 0.02)]

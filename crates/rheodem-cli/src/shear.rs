@@ -12,6 +12,7 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 
 /// Arguments of `shear-box`: every option overrides the same key of `--config`.
 #[derive(Args)]
+#[command(allow_negative_numbers = true)]
 pub struct ShearBoxArgs {
     /// A TOML file with the point's keys (mu_p, inertial, softness, bond, cohesion, …).
     #[arg(long)]
