@@ -88,6 +88,9 @@ pub struct Observables {
     pub sliding_fraction: f64,
     /// Coordination number `Z = 2 N_c / N` over free particles.
     pub coordination: f64,
+    /// Coordination number without rattlers (particles with fewer than 2 particle contacts).
+    #[serde(default)]
+    pub coordination_without_rattlers: f64,
     /// Pairs apart that still attract (open liquid bridges, reversible range), per free
     /// particle.
     pub bridges_per_particle: f64,

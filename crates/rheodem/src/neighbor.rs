@@ -358,6 +358,30 @@ impl NeighborList {
     pub fn has_images(&self) -> bool {
         self.image.iter().any(|&c| c != IDENTITY_IMAGE)
     }
+
+    /// Number of touching partners (`δ > 0`) of every particle slot, from the current
+    /// positions and the domain's current images.
+    pub fn contact_counts(&self, particles: &Particles, domain: &Domain) -> Vec<u32> {
+        let images = domain.image_transforms();
+        let mut count = vec![0u32; particles.len()];
+        for i in 0..self.offsets.len().saturating_sub(1) {
+            for k in self.offsets[i] as usize..self.offsets[i + 1] as usize {
+                let j = self.partner[k] as usize;
+                let code = self.image[k];
+                let r_j = if code == IDENTITY_IMAGE {
+                    particles.position[j]
+                } else {
+                    images[code as usize].position(particles.position[j])
+                };
+                let sum = particles.radius[i] + particles.radius[j];
+                if (particles.position[i] - r_j).length_squared() < sum * sum {
+                    count[i] += 1;
+                    count[j] += 1;
+                }
+            }
+        }
+        count
+    }
 }
 
 /// Linked-cell grid over the box.

@@ -168,6 +168,20 @@ impl Simulation {
         self.stress_control = Some(control);
     }
 
+    /// Coordination number of the free particles that have at least 2 particle contacts
+    /// (rattlers, with fewer, are left out): `Σ c_i / #{i : c_i ≥ 2}`.
+    pub fn coordination_without_rattlers(&self) -> f64 {
+        let counts = self.neighbors.contact_counts(&self.particles, &self.domain);
+        let (mut sum, mut n) = (0u64, 0u64);
+        for (i, &c) in counts.iter().enumerate() {
+            if c >= 2 && self.particles.motion[i].is_free() {
+                sum += u64::from(c);
+                n += 1;
+            }
+        }
+        if n > 0 { sum as f64 / n as f64 } else { 0.0 }
+    }
+
     /// Step at which the contact sums of [`Simulation::observables`] were gathered.
     pub fn measured_step(&self) -> u64 {
         self.measured.0
@@ -195,6 +209,7 @@ impl Simulation {
                 0.0
             },
             coordination: 2.0 * sums.contacts as f64 / free,
+            coordination_without_rattlers: self.coordination_without_rattlers(),
             bridges_per_particle: sums.attracting_apart as f64 / free,
             volume_fraction: p.free_volume() / volume,
             box_size: self.domain.lengths().to_array(),

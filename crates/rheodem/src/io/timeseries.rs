@@ -4,7 +4,7 @@ use crate::measure::Observables;
 use std::fmt::Write;
 
 /// Column names of the CSV, in order. Units: s, J, Pa.
-pub const COLUMNS: [&str; 26] = [
+pub const COLUMNS: [&str; 27] = [
     "time",
     "step",
     "kinetic_translational",
@@ -31,6 +31,7 @@ pub const COLUMNS: [&str; 26] = [
     "box_z",
     "granular_temperature",
     "bridges_per_particle",
+    "coordination_without_rattlers",
 ];
 
 /// Renders the rows as CSV with a header line; `mu_xy_yy` is `|σ_xy| / σ_yy`.
@@ -66,12 +67,13 @@ pub fn to_csv(rows: &[Observables]) -> String {
         }
         let _ = writeln!(
             out,
-            ",{mu:e},{:e},{:e},{:e},{:e},{:e}",
+            ",{mu:e},{:e},{:e},{:e},{:e},{:e},{:e}",
             o.box_size[0],
             o.box_size[1],
             o.box_size[2],
             o.granular_temperature,
-            o.bridges_per_particle
+            o.bridges_per_particle,
+            o.coordination_without_rattlers
         );
     }
     out

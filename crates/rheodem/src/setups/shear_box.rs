@@ -362,6 +362,9 @@ pub struct SteadyState {
     pub friction: Estimate,
     /// Coordination number `Z`.
     pub coordination: Estimate,
+    /// Coordination number without rattlers.
+    #[serde(default)]
+    pub coordination_without_rattlers: Option<Estimate>,
     /// `σ_yy` (Pa).
     pub sigma_yy: Estimate,
     /// `|σ_xy|` (Pa).
@@ -432,6 +435,7 @@ pub fn steady_state(
         volume_fraction: est(&phi),
         friction: est(&mu),
         coordination: est(&series(&|o| o.coordination)),
+        coordination_without_rattlers: block_average(&series(&|o| o.coordination_without_rattlers)),
         sigma_yy,
         shear_stress: est(&series(&|o| o.stress[0][1].abs())),
         mean_stress: est(&series(&|o| o.mean_stress())),
