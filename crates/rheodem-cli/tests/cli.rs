@@ -1,0 +1,145 @@
+//! The `rheodem` program end to end: exit codes, messages, outputs.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn rheodem(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_rheodem"))
+        .args(args)
+        .current_dir(workspace())
+        .output()
+        .expect("the binary runs")
+}
+
+fn workspace() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
+}
+
+fn temp(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("rheodem-cli-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    d
+}
+
+#[test]
+fn every_example_scenario_is_valid() {
+    for example in ["examples/dense-packing.toml", "examples/wet-settling.toml"] {
+        let out = rheodem(&["check", example]);
+        assert!(
+            out.status.success(),
+            "{example}: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let resolved = String::from_utf8_lossy(&out.stdout);
+        assert!(resolved.contains("\"dt\"") && resolved.contains("\"seed\""));
+    }
+}
+
+#[test]
+fn bad_input_exits_non_zero_with_the_key() {
+    let out = rheodem(&[
+        "shear-box",
+        "--mu-p",
+        "0.5",
+        "--inertial",
+        "-1",
+        "--softness",
+        "0.01",
+    ]);
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("inertial") && err.contains("(0, 2]"), "{err}");
+
+    let out = rheodem(&["run", "no/such/scenario.toml"]);
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("cannot read no/such/scenario.toml"));
+
+    let out = rheodem(&["resume", "no/such/run"]);
+    assert!(!out.status.success());
+}
+
+#[test]
+fn run_writes_its_outputs_and_resume_sees_it_complete() {
+    let dir = temp("run");
+    let scenario = dir.with_extension("toml");
+    let text =
+        std::fs::read_to_string(workspace().join("examples/dense-packing.toml")).expect("example");
+    // A shorter version of the default job.
+    let short = text
+        .replace("count = 1000", "count = 150")
+        .replace("duration = 0.3", "duration = 0.01")
+        .replace("size = [0.04, 0.04, 0.04]", "size = [0.022, 0.022, 0.022]");
+    std::fs::write(&scenario, short).expect("write scenario");
+    let dir_s = dir.to_string_lossy().into_owned();
+    let out = rheodem(&[
+        "run",
+        &scenario.to_string_lossy(),
+        "--out",
+        &dir_s,
+        "--quiet",
+        "--threads",
+        "1",
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    for f in [
+        "scenario.toml",
+        "resolved.json",
+        "timeseries.csv",
+        "snapshots.pvd",
+        "checkpoint.bin",
+        "summary.json",
+    ] {
+        assert!(dir.join(f).exists(), "missing {f}");
+    }
+    let summary = std::fs::read_to_string(dir.join("summary.json")).expect("summary");
+    assert!(summary.contains("\"status\": \"completed\""));
+    assert!(summary.contains("\"commit\""));
+    let out = rheodem(&["resume", &dir_s, "--quiet"]);
+    assert!(out.status.success());
+    assert!(String::from_utf8_lossy(&out.stdout).contains("already complete"));
+    let out = rheodem(&[
+        "run",
+        &scenario.to_string_lossy(),
+        "--out",
+        &dir_s,
+        "--quiet",
+    ]);
+    assert!(
+        !out.status.success(),
+        "a second run into the same directory must be refused"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+    let _ = std::fs::remove_file(&scenario);
+}
+
+#[test]
+fn contact_tools_write_csv_and_svg() {
+    let dir = temp("curve");
+    std::fs::create_dir_all(&dir).expect("dir");
+    let prefix = dir.join("bridge");
+    let out = rheodem(&[
+        "contact",
+        "curve",
+        "--law",
+        "liquid-bridge",
+        "--out",
+        &prefix.to_string_lossy(),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let csv = std::fs::read_to_string(prefix.with_extension("csv")).expect("csv");
+    assert!(csv.starts_with("leg,overlap_m,normal_force_N"));
+    let svg = std::fs::read_to_string(prefix.with_extension("svg")).expect("svg");
+    assert!(svg.contains("<svg") && svg.contains("overlap"));
+    let out = rheodem(&["contact", "equivalent", "--volume-nl", "75"]);
+    assert!(out.status.success());
+    assert!(String::from_utf8_lossy(&out.stdout).contains("0.2622"));
+    let _ = std::fs::remove_dir_all(&dir);
+}
