@@ -28,7 +28,7 @@
 #                                                              Open MPI when run as root)
 #   INSTALL        1 = apt-get install lammps if missing      (default: 1)
 #   SKIP_LAMMPS=1  / SKIP_RHEODEM=1                           skip one side
-#   PROBE_TIMEOUT  seconds allowed for `rheodem bench --help` (default: 30)
+#   PROBE_TIMEOUT  seconds allowed for `rheodem bench --help` (default: 300; it may rebuild)
 #   KEEP_TMP=1     keep the temp dir with every raw log
 #
 # Needs no network except apt (only when LAMMPS is missing). Exit status is 0 as long as at
@@ -48,7 +48,7 @@ NRUN=${NRUN:-3000}
 INSTALL=${INSTALL:-1}
 SKIP_LAMMPS=${SKIP_LAMMPS:-0}
 SKIP_RHEODEM=${SKIP_RHEODEM:-0}
-PROBE_TIMEOUT=${PROBE_TIMEOUT:-30}
+PROBE_TIMEOUT=${PROBE_TIMEOUT:-300}
 KEEP_TMP=${KEEP_TMP:-0}
 COUNTS=(1 2)                      # threads (rheodem) / MPI ranks (LAMMPS)
 
