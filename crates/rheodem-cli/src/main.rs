@@ -27,7 +27,7 @@ enum Command {
     Run {
         /// The scenario (TOML); omitted: the built-in default.
         scenario: Option<PathBuf>,
-        /// Run directory (default: runs/<scenario name>).
+        /// Run directory (default: `runs/<scenario name>`).
         #[arg(long, short)]
         out: Option<PathBuf>,
         /// Worker threads (default: all cores).
