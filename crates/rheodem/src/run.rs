@@ -327,10 +327,6 @@ impl Run {
         write_atomic(&path, json.as_bytes()).map_err(io_err(&path))
     }
 
-    /// The simulation (read-only).
-    pub fn simulation(&self) -> &Simulation {
-        &self.simulation
-    }
 }
 
 /// Checkpoints carry the scenario as TOML text: the binary format cannot hold its
