@@ -33,12 +33,20 @@ fn every_example_scenario_is_valid() {
         let resolved = String::from_utf8_lossy(&out.stdout);
         assert!(resolved.contains("\"dt\"") && resolved.contains("\"seed\""));
     }
-    let text = std::fs::read_to_string(workspace().join("examples/shear-box.toml")).expect("example");
-    let spec: rheodem::setups::shear_box::ShearBoxSpec = toml::from_str(&text).expect("valid shear-box point");
+    let text =
+        std::fs::read_to_string(workspace().join("examples/shear-box.toml")).expect("example");
+    let spec: rheodem::setups::shear_box::ShearBoxSpec =
+        toml::from_str(&text).expect("valid shear-box point");
     spec.scenario().expect("the point resolves to a scenario");
-    let text = std::fs::read_to_string(workspace().join("validation/shear-box.toml")).expect("sweep");
+    let text =
+        std::fs::read_to_string(workspace().join("validation/shear-box.toml")).expect("sweep");
     let sweep: rheodem::setups::sweep::SweepSpec = toml::from_str(&text).expect("valid sweep file");
-    assert!(rheodem::setups::sweep::expand(&sweep).expect("points expand").len() >= 18);
+    assert!(
+        rheodem::setups::sweep::expand(&sweep)
+            .expect("points expand")
+            .len()
+            >= 18
+    );
 }
 
 #[test]

@@ -326,7 +326,6 @@ impl Run {
         let json = serde_json::to_string_pretty(&summary).unwrap_or_default();
         write_atomic(&path, json.as_bytes()).map_err(io_err(&path))
     }
-
 }
 
 /// Checkpoints carry the scenario as TOML text: the binary format cannot hold its

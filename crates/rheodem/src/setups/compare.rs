@@ -72,6 +72,7 @@ pub fn comparison_markdown(results: &[PointResult]) -> String {
                     && q.spec.softness == p.softness
                     && q.spec.polydispersity == p.polydispersity
                     && q.spec.particles == p.particles
+                    && q.spec.peculiar_contacts == p.peculiar_contacts
             });
             match reference.and_then(|q| q.steady_state.as_ref()) {
                 Some(r0) => {
@@ -108,6 +109,11 @@ pub fn comparison_markdown(results: &[PointResult]) -> String {
         }
         let pct = |x: Option<f64>| x.map_or("–".to_string(), |v| format!("{:+.2} %", 100.0 * v));
         let num = |x: Option<f64>, d: usize| x.map_or("–".to_string(), |v| format!("{v:.d$}"));
+        let law = if p.peculiar_contacts {
+            format!("{:?}, seed-code convention", p.cohesion)
+        } else {
+            format!("{:?}", p.cohesion)
+        };
         let verdict = if ok {
             "pass".to_string()
         } else {
@@ -115,12 +121,12 @@ pub fn comparison_markdown(results: &[PointResult]) -> String {
         };
         let _ = writeln!(
             s,
-            "| {} | {} | {} | {} | {:?} | {:.1}–{:.1} | {} | {:.4} ± {:.4} | {} | {} | {:.0} % | {:.4} ± {:.4} | {} | {} | {} | {} | {} | {} |",
+            "| {} | {} | {} | {} | {} | {:.1}–{:.1} | {} | {:.4} ± {:.4} | {} | {} | {:.0} % | {:.4} ± {:.4} | {} | {} | {} | {} | {} | {} |",
             p.mu_p,
             p.inertial,
             p.softness,
             p.bond,
-            p.cohesion,
+            law,
             ss.strain_window[0],
             ss.strain_window[1],
             ss.steady,
