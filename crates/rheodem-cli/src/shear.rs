@@ -5,7 +5,9 @@ use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 use rheodem::io::atomic::write_atomic;
 use rheodem::setups::shear_box::ShearBoxSpec;
-use rheodem::setups::sweep::{PointResult, SweepSpec, default_out, expand, results_csv, run_point};
+use rheodem::setups::sweep::{
+    PointResult, SweepSpec, archived, default_out, expand, results_csv, run_point,
+};
 use std::path::{Path, PathBuf};
 use std::sync::Mutex;
 use std::sync::atomic::{AtomicUsize, Ordering};
@@ -224,6 +226,7 @@ pub fn sweep(path: &Path, jobs: Option<usize>, quiet: bool) -> Result<()> {
         .out
         .as_ref()
         .map_or_else(|| default_out(path), PathBuf::from);
+    let archive = spec.results.as_ref().map(PathBuf::from);
     std::fs::create_dir_all(&out).with_context(|| format!("cannot create {}", out.display()))?;
     let jobs = jobs
         .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()))
@@ -255,19 +258,38 @@ pub fn sweep(path: &Path, jobs: Option<usize>, quiet: bool) -> Result<()> {
                     };
                     let dir = out.join(name);
                     let mut last = 0u64;
-                    let outcome = pool.install(|| {
-                        run_point(name, point, &dir, 1, &mut |done, total| {
-                            let pct = done * 100 / total.max(1);
-                            if !quiet && pct >= last + 10 {
-                                last = pct;
-                                eprintln!("  {name}: {pct} %");
-                            }
-                        })
-                    });
+                    let kept = archive.as_deref().and_then(|a| archived(a, name, point));
+                    let outcome = match kept {
+                        Some(r) => Ok(r),
+                        None => pool.install(|| {
+                            run_point(name, point, &dir, 1, &mut |done, total| {
+                                let pct = done * 100 / total.max(1);
+                                if !quiet && pct >= last + 10 {
+                                    last = pct;
+                                    eprintln!("  {name}: {pct} %");
+                                }
+                            })
+                        }),
+                    };
                     match outcome {
                         Ok(r) => {
                             if !quiet {
                                 report(&r, &dir);
+                            }
+                            if let Some(a) = &archive {
+                                let json = serde_json::to_string_pretty(&r).unwrap_or_default();
+                                let _ = std::fs::create_dir_all(a);
+                                let _ =
+                                    write_atomic(&a.join(format!("{name}.json")), json.as_bytes());
+                                if let Ok(all) = results.lock() {
+                                    let mut done: Vec<PointResult> =
+                                        all.iter().flatten().cloned().collect();
+                                    done.push(r.clone());
+                                    let _ = write_atomic(
+                                        &a.join("results.csv"),
+                                        results_csv(&done).as_bytes(),
+                                    );
+                                }
                             }
                             if let Ok(mut all) = results.lock() {
                                 all[k] = Some(r);
@@ -313,13 +335,27 @@ pub fn compare(dir: &Path) -> Result<()> {
     let mut entries: Vec<PathBuf> = std::fs::read_dir(dir)
         .with_context(|| format!("cannot read {}", dir.display()))?
         .filter_map(|e| e.ok().map(|e| e.path()))
-        .filter(|p| p.is_dir())
         .collect();
     entries.sort();
-    for point in entries {
+    let mut names = std::collections::HashSet::new();
+    for file in entries
+        .iter()
+        .filter(|p| p.extension().is_some_and(|e| e == "json"))
+    {
+        let text = std::fs::read_to_string(file)
+            .with_context(|| format!("cannot read {}", file.display()))?;
+        if let Ok(r) = serde_json::from_str::<PointResult>(&text) {
+            names.insert(r.name.clone());
+            finished.push(r);
+        }
+    }
+    for point in entries.into_iter().filter(|p| p.is_dir()) {
         let name = point
             .file_name()
             .map_or(String::new(), |s| s.to_string_lossy().into_owned());
+        if names.contains(&name) {
+            continue;
+        }
         if let Ok(text) = std::fs::read_to_string(point.join("steady_state.json")) {
             let r: PointResult = serde_json::from_str(&text)
                 .with_context(|| format!("{}/steady_state.json", point.display()))?;

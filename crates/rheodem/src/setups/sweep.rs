@@ -31,6 +31,10 @@ pub struct SweepSpec {
     /// Output directory.
     #[serde(default)]
     pub out: Option<String>,
+    /// Directory where every finished point's result is also kept as `<name>.json` (e.g. in
+    /// version control): a point found there is not run again.
+    #[serde(default)]
+    pub results: Option<String>,
     /// Fields shared by every point.
     #[serde(default)]
     pub base: toml::Table,
@@ -235,6 +239,14 @@ pub fn results_csv(results: &[PointResult]) -> String {
         }
     }
     s
+}
+
+/// A finished point's result archived as `dir/<name>.json`, if it matches `spec`.
+pub fn archived(dir: &Path, name: &str, spec: &ShearBoxSpec) -> Option<PointResult> {
+    let text = std::fs::read_to_string(dir.join(format!("{name}.json"))).ok()?;
+    serde_json::from_str::<PointResult>(&text)
+        .ok()
+        .filter(|r| r.spec == *spec)
 }
 
 /// Default output directory of a sweep file.
