@@ -259,6 +259,7 @@ pub fn sweep(path: &Path, jobs: Option<usize>, quiet: bool) -> Result<()> {
                     let dir = out.join(name);
                     let mut last = 0u64;
                     let kept = archive.as_deref().and_then(|a| archived(a, name, point));
+                    let fresh = kept.is_none();
                     let outcome = match kept {
                         Some(r) => Ok(r),
                         None => pool.install(|| {
@@ -276,19 +277,16 @@ pub fn sweep(path: &Path, jobs: Option<usize>, quiet: bool) -> Result<()> {
                             if !quiet {
                                 report(&r, &dir);
                             }
-                            if let Some(a) = &archive {
-                                let json = serde_json::to_string_pretty(&r).unwrap_or_default();
-                                let _ = std::fs::create_dir_all(a);
-                                let _ =
-                                    write_atomic(&a.join(format!("{name}.json")), json.as_bytes());
-                                if let Ok(all) = results.lock() {
-                                    let mut done: Vec<PointResult> =
-                                        all.iter().flatten().cloned().collect();
-                                    done.push(r.clone());
-                                    let _ = write_atomic(
-                                        &a.join("results.csv"),
-                                        results_csv(&done).as_bytes(),
-                                    );
+                            if let (Some(a), true) = (&archive, fresh) {
+                                let done: Vec<PointResult> = results
+                                    .lock()
+                                    .map(|all| all.iter().flatten().cloned().collect())
+                                    .unwrap_or_default();
+                                if let Err(e) = archive_point(a, name, &r, done) {
+                                    errors
+                                        .lock()
+                                        .map(|mut v| v.push(format!("{name}: {e:#}")))
+                                        .ok();
                                 }
                             }
                             if let Ok(mut all) = results.lock() {
@@ -324,6 +322,27 @@ pub fn sweep(path: &Path, jobs: Option<usize>, quiet: bool) -> Result<()> {
     if !errors.is_empty() {
         bail!("{} points failed:\n{}", errors.len(), errors.join("\n"));
     }
+    Ok(())
+}
+
+/// Archives a freshly finished point as `archive/<name>.json` and rewrites
+/// `archive/results.csv` from the points finished so far (`done`) plus this one.
+fn archive_point(
+    archive: &Path,
+    name: &str,
+    result: &PointResult,
+    mut done: Vec<PointResult>,
+) -> Result<()> {
+    std::fs::create_dir_all(archive)
+        .with_context(|| format!("cannot create {}", archive.display()))?;
+    let json = serde_json::to_string_pretty(result)?;
+    let file = archive.join(format!("{name}.json"));
+    write_atomic(&file, json.as_bytes())
+        .with_context(|| format!("cannot write {}", file.display()))?;
+    done.push(result.clone());
+    let table = archive.join("results.csv");
+    write_atomic(&table, results_csv(&done).as_bytes())
+        .with_context(|| format!("cannot write {}", table.display()))?;
     Ok(())
 }
 

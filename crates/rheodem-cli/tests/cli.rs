@@ -157,3 +157,59 @@ fn contact_tools_write_csv_and_svg() {
     assert!(String::from_utf8_lossy(&out.stdout).contains("0.2622"));
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+#[test]
+fn sweep_archives_finished_points_and_does_not_rerun_them() {
+    let dir = temp("sweep");
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    let out = dir.join("runs");
+    let archive = dir.join("results");
+    let sweep = dir.join("sweep.toml");
+    let text = format!(
+        "out = {:?}\nresults = {:?}\n[base]\nmu_p = 0.5\nsoftness = 0.01\n\
+         polydispersity = 2.0\nparticles = 200\nstrain = 1.0\ntransient_strain = 0.5\n\
+         control_time = 10.0\nsnapshots = 0\nseed = 3\n[grid]\ninertial = [0.05, 0.1]\n",
+        out.display().to_string(),
+        archive.display().to_string()
+    );
+    std::fs::write(&sweep, text).expect("sweep file");
+    let sweep = sweep.display().to_string();
+
+    let first = rheodem(&["sweep", &sweep, "--jobs", "2", "--quiet"]);
+    assert!(first.status.success(), "{first:?}");
+    assert!(String::from_utf8_lossy(&first.stdout).contains("2 of 2 points finished"));
+    let mut files: Vec<PathBuf> = std::fs::read_dir(&archive)
+        .expect("archive written")
+        .map(|e| e.expect("entry").path())
+        .collect();
+    files.sort();
+    assert_eq!(files.len(), 3, "two points and results.csv: {files:?}");
+    let before: Vec<Vec<u8>> = files
+        .iter()
+        .map(|f| std::fs::read(f).expect("read"))
+        .collect();
+    let table = std::fs::read_to_string(archive.join("results.csv")).expect("table");
+    assert_eq!(
+        table.lines().count(),
+        3,
+        "header and one row per point:\n{table}"
+    );
+
+    // A second run finds both points in the archive: nothing runs, nothing is rewritten
+    // (not even in the last digit of a float).
+    std::fs::remove_dir_all(&out).expect("remove run directories");
+    let second = rheodem(&["sweep", &sweep, "--quiet"]);
+    assert!(second.status.success(), "{second:?}");
+    assert!(String::from_utf8_lossy(&second.stdout).contains("2 of 2 points finished"));
+    let after: Vec<Vec<u8>> = files
+        .iter()
+        .map(|f| std::fs::read(f).expect("read"))
+        .collect();
+    assert_eq!(before, after, "archived results were rewritten");
+    let reruns = std::fs::read_dir(&out)
+        .expect("out directory")
+        .filter(|e| e.as_ref().is_ok_and(|e| e.path().is_dir()))
+        .count();
+    assert_eq!(reruns, 0, "an archived point was run again");
+    let _ = std::fs::remove_dir_all(&dir);
+}
