@@ -307,15 +307,27 @@ pub fn sweep(path: &Path, jobs: Option<usize>, quiet: bool) -> Result<()> {
             });
         }
     });
-    let errors = errors.into_inner().unwrap_or_default();
-    let done = results
+    let mut errors = errors.into_inner().unwrap_or_default();
+    let done: Vec<PointResult> = results
         .into_inner()
         .unwrap_or_default()
         .into_iter()
         .flatten()
-        .count();
+        .collect();
+    // The tables in point order, archived points included (the ones written while the
+    // sweep ran list the points in the order they finished).
+    let csv = results_csv(&done);
+    for dir in std::iter::once(&out).chain(&archive) {
+        let file = dir.join("results.csv");
+        if let Err(e) =
+            std::fs::create_dir_all(dir).and_then(|()| write_atomic(&file, csv.as_bytes()))
+        {
+            errors.push(format!("cannot write {}: {e}", file.display()));
+        }
+    }
     println!(
-        "{done} of {} points finished; table in {}",
+        "{} of {} points finished; table in {}",
+        done.len(),
         points.len(),
         table.display()
     );
