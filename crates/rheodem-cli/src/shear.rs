@@ -277,23 +277,24 @@ pub fn sweep(path: &Path, jobs: Option<usize>, quiet: bool) -> Result<()> {
                             if !quiet {
                                 report(&r, &dir);
                             }
-                            if let (Some(a), true) = (&archive, fresh) {
-                                let done: Vec<PointResult> = results
+                            // One worker at a time writes the tables and the archive.
+                            let Ok(mut all) = results.lock() else {
+                                break;
+                            };
+                            let archived = match (&archive, fresh) {
+                                (Some(a), true) => archive_point(a, name, &r),
+                                _ => Ok(()),
+                            };
+                            all[k] = Some(r);
+                            let done: Vec<PointResult> = all.iter().flatten().cloned().collect();
+                            let written = write_atomic(&table, results_csv(&done).as_bytes())
+                                .with_context(|| format!("cannot write {}", table.display()));
+                            drop(all);
+                            if let Err(e) = archived.and(written) {
+                                errors
                                     .lock()
-                                    .map(|all| all.iter().flatten().cloned().collect())
-                                    .unwrap_or_default();
-                                if let Err(e) = archive_point(a, name, &r, done) {
-                                    errors
-                                        .lock()
-                                        .map(|mut v| v.push(format!("{name}: {e:#}")))
-                                        .ok();
-                                }
-                            }
-                            if let Ok(mut all) = results.lock() {
-                                all[k] = Some(r);
-                                let done: Vec<PointResult> =
-                                    all.iter().flatten().cloned().collect();
-                                let _ = write_atomic(&table, results_csv(&done).as_bytes());
+                                    .map(|mut v| v.push(format!("{name}: {e:#}")))
+                                    .ok();
                             }
                         }
                         Err(e) => {
@@ -307,55 +308,56 @@ pub fn sweep(path: &Path, jobs: Option<usize>, quiet: bool) -> Result<()> {
             });
         }
     });
-    let mut errors = errors.into_inner().unwrap_or_default();
-    let done: Vec<PointResult> = results
+    let errors = errors.into_inner().unwrap_or_default();
+    let done = results
         .into_inner()
         .unwrap_or_default()
         .into_iter()
         .flatten()
-        .collect();
-    // The tables in point order, archived points included (the ones written while the
-    // sweep ran list the points in the order they finished).
-    let csv = results_csv(&done);
-    for dir in std::iter::once(&out).chain(&archive) {
-        let file = dir.join("results.csv");
-        if let Err(e) =
-            std::fs::create_dir_all(dir).and_then(|()| write_atomic(&file, csv.as_bytes()))
-        {
-            errors.push(format!("cannot write {}: {e}", file.display()));
-        }
-    }
+        .count();
     println!(
-        "{} of {} points finished; table in {}",
-        done.len(),
+        "{done} of {} points finished; table in {}",
         points.len(),
         table.display()
     );
     if !errors.is_empty() {
-        bail!("{} points failed:\n{}", errors.len(), errors.join("\n"));
+        bail!("{} errors:\n{}", errors.len(), errors.join("\n"));
     }
     Ok(())
 }
 
 /// Archives a freshly finished point as `archive/<name>.json` and rewrites
-/// `archive/results.csv` from the points finished so far (`done`) plus this one.
-fn archive_point(
-    archive: &Path,
-    name: &str,
-    result: &PointResult,
-    mut done: Vec<PointResult>,
-) -> Result<()> {
+/// `archive/results.csv` from every point archived there (whichever sweep file ran it).
+fn archive_point(archive: &Path, name: &str, result: &PointResult) -> Result<()> {
     std::fs::create_dir_all(archive)
         .with_context(|| format!("cannot create {}", archive.display()))?;
     let json = serde_json::to_string_pretty(result)?;
     let file = archive.join(format!("{name}.json"));
     write_atomic(&file, json.as_bytes())
         .with_context(|| format!("cannot write {}", file.display()))?;
-    done.push(result.clone());
     let table = archive.join("results.csv");
-    write_atomic(&table, results_csv(&done).as_bytes())
+    write_atomic(&table, results_csv(&read_archive(archive)?).as_bytes())
         .with_context(|| format!("cannot write {}", table.display()))?;
     Ok(())
+}
+
+/// Every point result archived in `dir` as `<name>.json`, in file-name order.
+fn read_archive(dir: &Path) -> Result<Vec<PointResult>> {
+    let mut files: Vec<PathBuf> = std::fs::read_dir(dir)
+        .with_context(|| format!("cannot read {}", dir.display()))?
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| p.extension().is_some_and(|e| e == "json"))
+        .collect();
+    files.sort();
+    files
+        .iter()
+        .map(|file| {
+            let text = std::fs::read_to_string(file)
+                .with_context(|| format!("cannot read {}", file.display()))?;
+            serde_json::from_str::<PointResult>(&text)
+                .with_context(|| format!("{} is not a point result", file.display()))
+        })
+        .collect()
 }
 
 /// Runs `compare`: the validation table of a sweep directory, plus the progress of the
@@ -368,18 +370,9 @@ pub fn compare(dir: &Path) -> Result<()> {
         .filter_map(|e| e.ok().map(|e| e.path()))
         .collect();
     entries.sort();
-    let mut names = std::collections::HashSet::new();
-    for file in entries
-        .iter()
-        .filter(|p| p.extension().is_some_and(|e| e == "json"))
-    {
-        let text = std::fs::read_to_string(file)
-            .with_context(|| format!("cannot read {}", file.display()))?;
-        if let Ok(r) = serde_json::from_str::<PointResult>(&text) {
-            names.insert(r.name.clone());
-            finished.push(r);
-        }
-    }
+    finished.extend(read_archive(dir)?);
+    let names: std::collections::HashSet<String> =
+        finished.iter().map(|r| r.name.clone()).collect();
     for point in entries.into_iter().filter(|p| p.is_dir()) {
         let name = point
             .file_name()

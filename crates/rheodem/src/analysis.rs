@@ -3,9 +3,11 @@
 use serde::{Deserialize, Serialize};
 
 /// Mean of a correlated series with its standard error from block averaging
-/// (Flyvbjerg & Petersen): the series is coarsened by pairwise averaging until the
-/// error estimate stops growing; the largest estimate over levels with at least 8 blocks
-/// is reported (conservative when no clear plateau is reached).
+/// (Flyvbjerg & Petersen): the series is coarsened by pairwise averaging, level after
+/// level, and the largest standard-error estimate over the levels that keep at least 8
+/// blocks is reported — the plateau value when the series decorrelates within the
+/// window, a conservative bound when it does not. Under 8 samples the plain standard error
+/// is reported (it underestimates the error of a correlated series).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Estimate {
     /// Mean.

@@ -114,6 +114,14 @@ impl Observables {
     pub fn total_energy(&self) -> f64 {
         self.kinetic_translational + self.kinetic_rotational + self.elastic_energy
     }
+
+    /// Whether the energies, the stress and the box are finite numbers: `false` once a
+    /// simulation has blown up (a NaN or infinite position or velocity reaches all three).
+    pub fn is_finite(&self) -> bool {
+        self.total_energy().is_finite()
+            && self.stress.iter().flatten().all(|s| s.is_finite())
+            && self.box_size.iter().all(|l| l.is_finite())
+    }
 }
 
 /// Kinetic energies `(½ Σ m v², ½ Σ I ω²)` of the free particles (J).

@@ -87,6 +87,15 @@ impl Particles {
         self.position.len()
     }
 
+    /// Whether every position, velocity and angular velocity is a finite number.
+    pub fn is_finite(&self) -> bool {
+        self.position
+            .iter()
+            .chain(&self.velocity)
+            .chain(&self.angular_velocity)
+            .all(|v| v.is_finite())
+    }
+
     /// Whether the store is empty.
     #[inline]
     pub fn is_empty(&self) -> bool {

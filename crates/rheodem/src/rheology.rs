@@ -12,34 +12,35 @@ use serde::Serialize;
 /// Coefficients of the volume-fraction law for one `μ_p` (000 Tables 3 and 5).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
 pub struct PhiLaw {
-    /// Particle friction the row belongs to.
+    /// Interparticle friction coefficient `μ_p` the row belongs to (dimensionless).
     pub mu_p: f64,
-    /// `φ_0`.
+    /// `φ_0`: volume fraction of the quasi-static, rigid, cohesionless limit.
     pub phi_0: f64,
-    /// `I_φ`.
+    /// `I_φ`: inertial number over which `φ` falls linearly (dimensionless).
     pub i_phi: f64,
-    /// `p*_φ`.
+    /// `p*_φ`: softness over which `φ` grows linearly (dimensionless).
     pub p_phi: f64,
-    /// `p₁ … p₄` of `g_c`.
+    /// `p₁ … p₄`: polynomial coefficients of the cohesion factor `g_c(Bo)`.
     pub gc: [f64; 4],
 }
 
 /// Coefficients of the friction law for one `μ_p` (000 Table 7, simple-shear rows).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
 pub struct MuLaw {
-    /// Particle friction the row belongs to.
+    /// Interparticle friction coefficient `μ_p` the row belongs to (dimensionless).
     pub mu_p: f64,
-    /// `μ_0`.
+    /// `μ_0`: macroscopic friction of the quasi-static, rigid, cohesionless limit.
     pub mu_0: f64,
-    /// `μ_∞`.
+    /// `μ_∞`: macroscopic friction approached at large inertial number.
     pub mu_inf: f64,
-    /// `I_μ`.
+    /// `I_μ`: inertial number of the crossover from `μ_0` to `μ_∞`.
     pub i_mu: f64,
-    /// `p*_μ`.
+    /// `p*_μ`: softness scale of the softening factor; the law applies for
+    /// `(1 + Bo) p* < p*_μ` only.
     pub p_mu: f64,
-    /// `α₁`.
+    /// `α₁`: amplitude of the cohesion factor `1 + α₁ Bo^β₁`.
     pub alpha: f64,
-    /// `β₁`.
+    /// `β₁`: exponent of the cohesion factor.
     pub beta: f64,
 }
 
@@ -188,7 +189,8 @@ impl MuLaw {
             .find(|l| (l.mu_p - mu_p).abs() < 1e-9)
     }
 
-    /// `μ(I, p*, Bo)` (000 Eq. 1A).
+    /// `μ(I, p*, Bo)` (000 Eq. 1A), dimensionless. Meaningful for `(1 + Bo) p* < p*_μ`;
+    /// beyond it the softening factor, and the result, turn negative.
     pub fn mu(&self, inertial: f64, softness: f64, bond: f64) -> f64 {
         let f_i = 1.0 + (self.mu_inf / self.mu_0 - 1.0) / (1.0 + self.i_mu / inertial);
         let f_p = 1.0 - ((1.0 + bond) * softness / self.p_mu).sqrt();

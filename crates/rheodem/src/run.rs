@@ -49,6 +49,25 @@ pub enum RunError {
         "{0} already holds a run: resume it with `rheodem resume {0}`, or pass --force to start over"
     )]
     Exists(PathBuf),
+    /// The run directory holds a run of another scenario than the one asked for.
+    #[error(
+        "{0} holds a run of different parameters than this point (changed since it started?): \
+         remove the directory to start the point over"
+    )]
+    Mismatch(PathBuf),
+    /// The state stopped being finite numbers.
+    #[error(
+        "the simulation blew up at step {step} (t = {time:e} s): non-finite energy or stress; \
+         the last checkpoint before it is kept. Usual causes: a time step too large for the \
+         stiffest contact (`run.dt`), or a prescribed motion or force far beyond the contact \
+         stiffness"
+    )]
+    Diverged {
+        /// Step of the first non-finite row.
+        step: u64,
+        /// Simulated time of that row (s).
+        time: f64,
+    },
     /// The neighbour search failed (box too small).
     #[error(transparent)]
     Neighbor(#[from] NeighborError),
@@ -251,6 +270,12 @@ impl Run {
                 } else {
                     Status::Running
                 };
+                if !self.simulation.particles.is_finite() {
+                    return Err(RunError::Diverged {
+                        step: next,
+                        time: self.simulation.time,
+                    });
+                }
                 self.checkpoint(dir, status)?;
             }
             progress(next, self.plan.steps);
@@ -261,7 +286,14 @@ impl Run {
 
     /// Appends a time-series row for the current (measured) state, and a snapshot if due.
     fn record(&mut self, dir: &Path) -> Result<(), RunError> {
-        self.rows.push(self.simulation.observables());
+        let row = self.simulation.observables();
+        if !row.is_finite() {
+            return Err(RunError::Diverged {
+                step: row.step,
+                time: row.time,
+            });
+        }
+        self.rows.push(row);
         if OutputPlan::due(self.plan.snapshot_every, self.simulation.step) {
             self.snapshot(dir)?;
         }

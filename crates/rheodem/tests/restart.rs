@@ -129,3 +129,29 @@ fn corrupt_checkpoint_is_an_error_not_a_panic() {
     assert!(err.to_string().contains("not a usable checkpoint"));
     let _ = std::fs::remove_dir_all(dir);
 }
+
+#[test]
+fn a_run_that_blows_up_stops_with_an_error_and_keeps_its_checkpoint() {
+    let dir = temp_dir("diverged");
+    let mut run = start(&dir);
+    run.advance_until(&dir, 200, &mut |_, _| {})
+        .expect("healthy start");
+    // A non-finite velocity stands for any blow-up (a time step far too large, say).
+    run.simulation.particles.velocity[0] = glam::DVec3::new(f64::NAN, 0.0, 0.0);
+    let err = run
+        .advance_until(&dir, run.plan.steps, &mut |_, _| {})
+        .expect_err("must stop");
+    assert!(
+        matches!(err, rheodem::run::RunError::Diverged { .. }),
+        "{err}"
+    );
+    assert!(err.to_string().contains("blew up at step"), "{err}");
+    assert!(run.rows.iter().all(|r| r.is_finite()), "no NaN row kept");
+    // Whatever checkpoint is on disk predates the blow-up and resumes.
+    if dir.join("checkpoint.bin").exists() {
+        let resumed = Run::resume(&dir).expect("the last checkpoint is usable");
+        assert!(resumed.simulation.particles.is_finite());
+        assert!(resumed.rows.iter().all(|r| r.is_finite()));
+    }
+    let _ = std::fs::remove_dir_all(dir);
+}

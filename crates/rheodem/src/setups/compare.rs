@@ -8,6 +8,10 @@
 //! compression (`Δφ > 0`) at `μ_p = 0.01` for `Bo` = 2 and 4, dilation (`Δφ < 0`) at
 //! `μ_p = 0.5` for `Bo` = 0.5, 1 and 2. A sign counts as measured when `|Δφ|` exceeds two
 //! combined standard errors.
+//!
+//! Verdicts: `pass` when every check that applies holds (caveats in brackets), `MISS` with
+//! the reasons when one fails or the averaging window still drifts, `unchecked` when no
+//! check applied (no fitted law for the point's `μ_p`).
 
 use super::sweep::PointResult;
 use crate::rheology::{MuLaw, PhiLaw};
@@ -56,6 +60,7 @@ pub fn comparison_markdown(results: &[PointResult]) -> String {
         };
         let mu_dev = mu_seed.map(|m| mu.mean / m - 1.0);
         let mut ok = ss.steady;
+        let mut checked = phi_dev.is_some() || mu_dev.is_some();
         let mut notes = Vec::new();
         if let Some(d) = phi_dev {
             ok &= d.abs() <= phi_tol;
@@ -89,10 +94,12 @@ pub fn comparison_markdown(results: &[PointResult]) -> String {
                         (Some(m), Some(x)) => {
                             sign_txt = format!("{} ({})", word(m), word(x));
                             ok &= m == x;
+                            checked = true;
                         }
                         (None, Some(x)) => {
                             sign_txt = format!("unresolved ({})", word(x));
                             ok = false;
+                            checked = true;
                             notes.push("Δφ within 2σ");
                         }
                         (Some(m), None) => sign_txt = format!("{} (–)", word(m)),
@@ -101,6 +108,9 @@ pub fn comparison_markdown(results: &[PointResult]) -> String {
                 }
                 None => {
                     notes.push("no Bo = 0 reference yet");
+                    if expected_sign(p.mu_p, p.bond).is_some() {
+                        ok = false;
+                    }
                 }
             }
         }
@@ -114,10 +124,15 @@ pub fn comparison_markdown(results: &[PointResult]) -> String {
         } else {
             format!("{:?}", p.cohesion)
         };
-        let verdict = if ok {
-            "pass".to_string()
-        } else {
-            format!("MISS {}", notes.join(", "))
+        if phi_seed.is_none() {
+            notes.push("no fitted law for this μ_p");
+        }
+        // A point that met no check is not a pass; a pass keeps its caveats.
+        let verdict = match (checked, ok, notes.is_empty()) {
+            (false, _, _) => format!("unchecked: {}", notes.join(", ")),
+            (true, true, true) => "pass".to_string(),
+            (true, true, false) => format!("pass ({})", notes.join(", ")),
+            (true, false, _) => format!("MISS {}", notes.join(", ")),
         };
         let _ = writeln!(
             s,

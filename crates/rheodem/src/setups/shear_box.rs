@@ -35,7 +35,7 @@ pub enum Cohesion {
     LinearIrreversible,
 }
 
-/// Contact angle of the liquid-bridge option (rad): 20°, as in the seeds.
+/// Contact angle of the liquid-bridge option (degrees), as in the seeds.
 const BRIDGE_ANGLE_DEG: f64 = 20.0;
 
 fn default_range() -> f64 {
@@ -428,6 +428,9 @@ pub fn steady_state(
         notes.push("macroscopic friction still drifting".to_string());
     }
     let p = sigma_yy.mean;
+    if p <= 0.0 {
+        notes.push("mean σ_yy not compressive: I and Bo not measurable (reported as 0)".into());
+    }
     Some(SteadyState {
         steady: notes.is_empty(),
         note: notes.join("; "),
@@ -442,7 +445,11 @@ pub fn steady_state(
         granular_temperature: est(&series(&|o| o.granular_temperature)),
         sliding_fraction: est(&series(&|o| o.sliding_fraction)),
         bridges_per_particle: est(&series(&|o| o.bridges_per_particle)),
-        inertial_measured: dv.shear_rate * spec.diameter / (p / spec.density).sqrt(),
+        inertial_measured: if p > 0.0 {
+            dv.shear_rate * spec.diameter / (p / spec.density).sqrt()
+        } else {
+            0.0
+        },
         softness_measured: p * spec.diameter / spec.stiffness,
         bond_measured: if p > 0.0 {
             dv.max_force / (p * spec.diameter * spec.diameter)

@@ -154,10 +154,17 @@ pub fn run_point(
         return Ok(done);
     }
     let derived = spec.derive()?;
+    let scenario = spec.scenario()?;
     let mut run = if dir.join("checkpoint.bin").exists() {
-        Run::resume(dir)?
+        let run = Run::resume(dir)?;
+        // The directory name does not encode every field (strain, material, …): a run
+        // started with other values must not be continued under this point's name.
+        if run.scenario != scenario {
+            return Err(RunError::Mismatch(dir.to_path_buf()));
+        }
+        run
     } else {
-        Run::start(spec.scenario()?, Path::new("."), dir, threads, true)?
+        Run::start(scenario, Path::new("."), dir, threads, true)?
     };
     run.advance_until(dir, run.plan.steps, progress)?;
     let result = PointResult {
@@ -168,7 +175,10 @@ pub fn run_point(
         wall_seconds: run.wall_seconds,
         commit: crate::COMMIT.to_string(),
     };
-    let json = serde_json::to_string_pretty(&result).unwrap_or_default();
+    let json = serde_json::to_string_pretty(&result).map_err(|e| RunError::Io {
+        path: result_path.clone(),
+        source: e.into(),
+    })?;
     write_atomic(&result_path, json.as_bytes()).map_err(|source| RunError::Io {
         path: result_path.clone(),
         source,
@@ -230,9 +240,11 @@ pub fn results_csv(results: &[PointResult]) -> String {
                 );
             }
             None => {
+                // `steady`, 18 empty measurement fields, `wall_seconds`, `note`
                 let _ = writeln!(
                     s,
-                    "false,,,,,,,,,,,,,,,,,,,,{:.1},\"too few rows\"",
+                    "false{},{:.1},\"too few rows\"",
+                    ",".repeat(18),
                     r.wall_seconds
                 );
             }
