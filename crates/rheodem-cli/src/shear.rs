@@ -61,13 +61,13 @@ pub struct ShearBoxArgs {
     /// Strain before averaging.
     #[arg(long)]
     transient_strain: Option<f64>,
-    /// Seed.
-    #[arg(long)]
+    /// Seed (0 to 2⁶³ − 1, the range a TOML file holds).
+    #[arg(long, value_parser = clap::value_parser!(u64).range(..=i64::MAX as u64))]
     seed: Option<u64>,
     /// Seed-code contact convention (relative velocities without the mean flow), for
-    /// comparison only.
-    #[arg(long)]
-    peculiar_contacts: bool,
+    /// comparison only; `--peculiar-contacts false` overrides a config file.
+    #[arg(long, num_args = 0..=1, default_missing_value = "true")]
+    peculiar_contacts: Option<bool>,
     /// Run directory (default: runs/shear-box).
     #[arg(long, short)]
     out: Option<PathBuf>,
@@ -112,14 +112,18 @@ fn spec_from(a: &ShearBoxArgs) -> Result<ShearBoxSpec> {
     );
     set("strain", f(a.strain));
     set("transient_strain", f(a.transient_strain));
-    set("seed", a.seed.map(|n| toml::Value::Integer(n as i64)));
+    set(
+        "seed",
+        a.seed
+            .and_then(|n| i64::try_from(n).ok())
+            .map(toml::Value::Integer),
+    );
     set(
         "peculiar_contacts",
-        a.peculiar_contacts.then_some(toml::Value::Boolean(true)),
+        a.peculiar_contacts.map(toml::Value::Boolean),
     );
-    let text = toml::to_string(&table).unwrap_or_default();
-    let spec: ShearBoxSpec =
-        toml::from_str(&text).map_err(|e| anyhow::anyhow!("shear-box point: {e}"))?;
+    let spec =
+        ShearBoxSpec::from_table(table).map_err(|e| anyhow::anyhow!("shear-box point: {e}"))?;
     spec.derive()?;
     Ok(spec)
 }

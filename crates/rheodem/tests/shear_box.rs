@@ -317,6 +317,15 @@ fn invalid_inputs_name_their_key() {
             },
         ),
         (
+            // too few spheres for three neighbour cells of the largest pair
+            "particles",
+            ShearBoxSpec {
+                particles: 100,
+                polydispersity: 20.0,
+                ..ok.clone()
+            },
+        ),
+        (
             "restitution",
             ShearBoxSpec {
                 restitution: 1.5,

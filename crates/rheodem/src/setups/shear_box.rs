@@ -165,6 +165,24 @@ pub struct Derived {
     pub duration: f64,
 }
 
+/// Smallest and largest radius (m) of the distribution with mean diameter `d` (m) and
+/// polydispersity `w` (radii uniform in `[d/(1+w), w d/(1+w)]`, as
+/// [`crate::generate::polydisperse_radii`] draws them).
+fn radius_bounds(d: f64, w: f64) -> (f64, f64) {
+    (d / (1.0 + w), w * d / (1.0 + w))
+}
+
+/// Mean sphere volume (m³) of that distribution.
+fn mean_volume(d: f64, w: f64) -> f64 {
+    let (r1, r2) = radius_bounds(d, w);
+    let mean_r3 = if r2 > r1 {
+        (r2.powi(4) - r1.powi(4)) / (4.0 * (r2 - r1))
+    } else {
+        r1.powi(3)
+    };
+    4.0 / 3.0 * PI * mean_r3
+}
+
 fn in_range(key: &str, v: f64, lo: f64, hi: f64, open_lo: bool) -> Result<f64, ScenarioError> {
     let ok = v.is_finite() && v <= hi && if open_lo { v > lo } else { v >= lo };
     if ok {
@@ -176,6 +194,12 @@ fn in_range(key: &str, v: f64, lo: f64, hi: f64, open_lo: bool) -> Result<f64, S
 }
 
 impl ShearBoxSpec {
+    /// A spec from a TOML table (a config file, a sweep point, command-line overrides);
+    /// the error names the offending key.
+    pub fn from_table(table: toml::Table) -> Result<ShearBoxSpec, toml::de::Error> {
+        toml::Value::Table(table).try_into()
+    }
+
     /// Validates the controls and derives the SI values.
     pub fn derive(&self) -> Result<Derived, ScenarioError> {
         in_range("mu_p", self.mu_p, 0.0, 10.0, false)?;
@@ -212,6 +236,29 @@ impl ShearBoxSpec {
                 "a positive bond number needs a cohesion law (reversible, liquid_bridge, linear_irreversible)",
             ));
         }
+        // Lees-Edwards needs the sheared box at least three neighbour cells wide; a cell
+        // holds the largest pair plus the attraction range and the skin (0.1 d_p). The
+        // box edge is estimated at φ = 0.75, above every steady state of the seeds.
+        let (_, r_max) = radius_bounds(d, self.polydispersity);
+        let reach = match self.cohesion {
+            Cohesion::LiquidBridge | Cohesion::LinearIrreversible => range * d,
+            Cohesion::None | Cohesion::Reversible => 0.0,
+        };
+        let cell = 2.0 * r_max + reach + 0.1 * d;
+        let per_particle = mean_volume(d, self.polydispersity) / 0.75;
+        let fewest = ((3.0 * cell).powi(3) / per_particle).ceil();
+        if (self.particles as f64) < fewest {
+            return Err(invalid(
+                "particles",
+                self.particles,
+                format!(
+                    "must be at least {fewest} with polydispersity {} and this cohesion range: \
+                     the sheared box must stay three neighbour cells (largest pair + range + \
+                     skin) wide",
+                    self.polydispersity
+                ),
+            ));
+        }
         let p = ps * k / d;
         let shear_rate = i * (p / rho).sqrt() / d;
         Ok(Derived {
@@ -230,15 +277,12 @@ impl ShearBoxSpec {
         let dv = self.derive()?;
         let d = self.diameter;
         let w = self.polydispersity;
-        // Mean particle volume of radii uniform in [r1, r2].
-        let (r1, r2) = (d / (1.0 + w), w * d / (1.0 + w));
-        let mean_r3 = if r2 > r1 {
-            (r2.powi(4) - r1.powi(4)) / (4.0 * (r2 - r1))
-        } else {
-            r1.powi(3)
-        };
-        let solid = self.particles as f64 * 4.0 / 3.0 * PI * mean_r3;
-        let edge = (solid / 0.3).cbrt();
+        let solid = self.particles as f64 * mean_volume(d, w);
+        // The random insertion accepts at most φ = 0.35 of the radii actually drawn; their
+        // volume scatters about `solid` by ~1.1/sqrt(N) relative at w = 20, so small boxes
+        // start looser (φ = 0.2 keeps N = 16 below the limit at 2.7 standard deviations).
+        let loose = if self.particles >= 1000 { 0.3 } else { 0.2 };
+        let edge = (solid / loose).cbrt();
         let adhesion = if self.bond == 0.0 {
             None
         } else {

@@ -83,8 +83,7 @@ pub fn expand(spec: &SweepSpec) -> Result<Vec<(String, ShearBoxSpec)>, ScenarioE
     for (k, extra) in tables.into_iter().enumerate() {
         let mut t = spec.base.clone();
         t.extend(extra);
-        let text = toml::to_string(&t).unwrap_or_default();
-        let point: ShearBoxSpec = toml::from_str(&text)
+        let point = ShearBoxSpec::from_table(t)
             .map_err(|e| ScenarioError::Parse(format!("sweep point {k}: {e}")))?;
         point
             .derive()
