@@ -172,15 +172,14 @@ fn radius_bounds(d: f64, w: f64) -> (f64, f64) {
     (d / (1.0 + w), w * d / (1.0 + w))
 }
 
-/// Mean sphere volume (m³) of that distribution.
-fn mean_volume(d: f64, w: f64) -> f64 {
+/// Mean cubed radius (m³) of that distribution.
+fn mean_radius_cubed(d: f64, w: f64) -> f64 {
     let (r1, r2) = radius_bounds(d, w);
-    let mean_r3 = if r2 > r1 {
+    if r2 > r1 {
         (r2.powi(4) - r1.powi(4)) / (4.0 * (r2 - r1))
     } else {
         r1.powi(3)
-    };
-    4.0 / 3.0 * PI * mean_r3
+    }
 }
 
 fn in_range(key: &str, v: f64, lo: f64, hi: f64, open_lo: bool) -> Result<f64, ScenarioError> {
@@ -245,7 +244,7 @@ impl ShearBoxSpec {
             Cohesion::None | Cohesion::Reversible => 0.0,
         };
         let cell = 2.0 * r_max + reach + 0.1 * d;
-        let per_particle = mean_volume(d, self.polydispersity) / 0.75;
+        let per_particle = 4.0 / 3.0 * PI * mean_radius_cubed(d, self.polydispersity) / 0.75;
         let fewest = ((3.0 * cell).powi(3) / per_particle).ceil();
         if (self.particles as f64) < fewest {
             return Err(invalid(
@@ -277,7 +276,7 @@ impl ShearBoxSpec {
         let dv = self.derive()?;
         let d = self.diameter;
         let w = self.polydispersity;
-        let solid = self.particles as f64 * mean_volume(d, w);
+        let solid = self.particles as f64 * 4.0 / 3.0 * PI * mean_radius_cubed(d, w);
         // The random insertion accepts at most φ = 0.35 of the radii actually drawn; their
         // volume scatters about `solid` by ~1.1/sqrt(N) relative at w = 20, so small boxes
         // start looser (φ = 0.2 keeps N = 16 below the limit at 2.7 standard deviations).
