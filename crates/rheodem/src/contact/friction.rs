@@ -29,8 +29,10 @@ impl Resistance {
 
     /// Whether this resistance can ever produce a force: it needs a spring or a dashpot
     /// and a non-zero Coulomb limit.
+    #[inline]
     pub fn is_active(&self) -> bool {
-        (self.stiffness > 0.0 || !self.damping.is_zero()) && self.mu_static > 0.0
+        // The Coulomb limit first: one comparison settles the usual inactive case.
+        self.mu_static > 0.0 && (self.stiffness > 0.0 || !self.damping.is_zero())
     }
 
     /// Advances a spring `xi` (m) that lives in the tangent plane of a contact with unit

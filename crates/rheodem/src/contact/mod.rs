@@ -113,7 +113,7 @@ impl ContactLaw {
     /// Evaluates a pair at any overlap and advances its history over `dt` (s). Returns
     /// `None` when the pair does not interact; its history is then reset (an irreversible
     /// bridge past its rupture distance is gone).
-    #[inline]
+    #[inline(always)]
     pub fn interact(
         &self,
         k: &PairKinematics,
@@ -142,7 +142,7 @@ impl ContactLaw {
 
     /// Evaluates the contact of a touching pair (`overlap > 0`) and advances its history
     /// over `dt` (s). The Coulomb limits use the repulsive part `|k_n δ + γ_n δ̇|` alone.
-    #[inline]
+    #[inline(always)]
     pub fn evaluate(&self, k: &PairKinematics, h: &mut ContactHistory, dt: f64) -> PairForce {
         let n = k.normal;
         let lever_i = k.radius_i - 0.5 * k.overlap;
