@@ -70,8 +70,12 @@ enum Command {
     /// Compare the finished points of a sweep directory with seed 000's fitted laws
     /// (markdown table).
     Compare {
-        /// The sweep's output directory.
+        /// The sweep's output directory (or its results archive).
         dir: PathBuf,
+        /// Also write the validation figures (SVG: φ and μ against Bo, I and p*, with the
+        /// seed's laws) into this directory.
+        #[arg(long)]
+        figures: Option<PathBuf>,
     },
     /// Contact-law tools: force–overlap curves, equivalent linear model.
     #[command(subcommand)]
@@ -226,7 +230,7 @@ fn run(cli: Cli) -> Result<()> {
         Command::Contact(cmd) => contact::run(cmd),
         Command::ShearBox(args) => shear::shear_box(args),
         Command::Sweep { file, jobs, quiet } => shear::sweep(&file, jobs, quiet),
-        Command::Compare { dir } => shear::compare(&dir),
+        Command::Compare { dir, figures } => shear::compare(&dir, figures.as_deref()),
         Command::Check { scenario } => {
             let sc = Scenario::from_file(&scenario)?;
             let base = scenario.parent().unwrap_or(Path::new("."));

@@ -365,8 +365,8 @@ fn read_archive(dir: &Path) -> Result<Vec<PointResult>> {
 }
 
 /// Runs `compare`: the validation table of a sweep directory, plus the progress of the
-/// points still running.
-pub fn compare(dir: &Path) -> Result<()> {
+/// points still running; with `figures`, the validation figures written there as SVG.
+pub fn compare(dir: &Path, figures: Option<&Path>) -> Result<()> {
     let mut finished = Vec::new();
     let mut running = Vec::new();
     let mut entries: Vec<PathBuf> = std::fs::read_dir(dir)
@@ -402,6 +402,17 @@ pub fn compare(dir: &Path) -> Result<()> {
         "{}",
         rheodem::setups::compare::comparison_markdown(&finished)
     );
+    if let Some(out) = figures {
+        std::fs::create_dir_all(out).with_context(|| format!("cannot create {}", out.display()))?;
+        let svgs = rheodem::setups::compare::comparison_figures(&finished)
+            .map_err(|e| anyhow::anyhow!("cannot draw the figures: {e}"))?;
+        for (name, svg) in svgs {
+            let file = out.join(name);
+            write_atomic(&file, svg.as_bytes())
+                .with_context(|| format!("cannot write {}", file.display()))?;
+            eprintln!("wrote {}", file.display());
+        }
+    }
     if !running.is_empty() {
         println!("\nNot finished:\n{}", running.join("\n"));
     }

@@ -12,6 +12,15 @@ pub struct Series<'a> {
     pub points: &'a [(f64, f64)],
 }
 
+/// Named measured points `(x, y, standard error of y)`, drawn as dots with error bars in
+/// the colour of the curve of the same index.
+pub struct Markers<'a> {
+    /// Legend label.
+    pub label: &'a str,
+    /// The points.
+    pub points: &'a [(f64, f64, f64)],
+}
+
 /// Axis labels and title of a plot.
 pub struct Labels<'a> {
     /// Title above the plot.
@@ -37,15 +46,34 @@ fn register_font() {
 
 /// Renders the series as an SVG document, 800×560 pixels.
 pub fn line_plot_svg(labels: &Labels<'_>, series: &[Series<'_>]) -> Result<String, String> {
+    plot_svg(labels, series, &[])
+}
+
+/// Renders curves and measured points with error bars as an SVG document, 800×560 pixels.
+/// Curve `k` and marker set `k` share a colour; marker sets beyond the curves get colours
+/// of their own.
+pub fn plot_svg(
+    labels: &Labels<'_>,
+    series: &[Series<'_>],
+    markers: &[Markers<'_>],
+) -> Result<String, String> {
     register_font();
-    let all = series.iter().flat_map(|s| s.points.iter());
+    let curve_points = series.iter().flat_map(|s| s.points.iter().copied());
+    let marker_points = markers.iter().flat_map(|m| {
+        m.points
+            .iter()
+            .flat_map(|&(x, y, e)| [(x, y - e.abs()), (x, y + e.abs())])
+    });
     let (mut x0, mut x1, mut y0, mut y1) = (
         f64::INFINITY,
         f64::NEG_INFINITY,
         f64::INFINITY,
         f64::NEG_INFINITY,
     );
-    for &(x, y) in all {
+    for (x, y) in curve_points.chain(marker_points) {
+        if !(x.is_finite() && y.is_finite()) {
+            continue;
+        }
         x0 = x0.min(x);
         x1 = x1.max(x);
         y0 = y0.min(y);
@@ -93,6 +121,23 @@ pub fn line_plot_svg(labels: &Labels<'_>, series: &[Series<'_>]) -> Result<Strin
                 .legend(move |(x, y)| {
                     PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2))
                 });
+        }
+        for (k, m) in markers.iter().enumerate() {
+            let color = Palette99::pick(k).to_rgba();
+            chart
+                .draw_series(m.points.iter().map(|&(x, y, e)| {
+                    ErrorBar::new_vertical(x, y - e.abs(), y, y + e.abs(), color.stroke_width(2), 8)
+                }))
+                .map_err(|e| e.to_string())?;
+            chart
+                .draw_series(
+                    m.points
+                        .iter()
+                        .map(|&(x, y, _)| Circle::new((x, y), 4, color.filled())),
+                )
+                .map_err(|e| e.to_string())?
+                .label(m.label)
+                .legend(move |(x, y)| Circle::new((x + 10, y), 4, color.filled()));
         }
         chart
             .configure_series_labels()

@@ -122,3 +122,24 @@ fn a_point_resumes_only_a_run_of_its_own_parameters() {
     assert!(err.to_string().contains("remove the directory"), "{err}");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+#[test]
+fn figures_show_the_points_that_belong_to_them() {
+    // The small point sits at I = 0.05, p* = 0.01, Bo = 0: it belongs to the figures
+    // against I only.
+    let figures = rheodem::setups::compare::comparison_figures(std::slice::from_ref(finished()))
+        .expect("figures");
+    let names: Vec<&str> = figures.iter().map(|(n, _)| *n).collect();
+    assert_eq!(names, ["phi_vs_inertial.svg", "mu_vs_inertial.svg"]);
+    for (name, svg) in &figures {
+        assert!(svg.starts_with("<svg"), "{name}");
+        assert!(svg.contains("seed 000 law"), "{name}: the law is drawn");
+        assert!(svg.contains("<circle"), "{name}: the point is drawn");
+    }
+    // No finished point, no figure.
+    assert!(
+        rheodem::setups::compare::comparison_figures(&[])
+            .expect("nothing to draw is not an error")
+            .is_empty()
+    );
+}

@@ -14,6 +14,7 @@
 //! check applied (no fitted law for the point's `μ_p`).
 
 use super::sweep::PointResult;
+use crate::plot::{Labels, Markers, Series, plot_svg};
 use crate::rheology::{MuLaw, PhiLaw};
 use std::fmt::Write;
 
@@ -161,4 +162,165 @@ pub fn comparison_markdown(results: &[PointResult]) -> String {
         );
     }
     s
+}
+
+/// Measured points `(x, mean, standard error)` of one group in a figure.
+type MeasuredPoints = Vec<(f64, f64, f64)>;
+
+/// The points of the validation figures: measured points against the seed's laws.
+const FIGURE_GROUPS: [(f64, bool, &str); 3] = [
+    (0.01, false, "μ_p = 0.01"),
+    (0.5, false, "μ_p = 0.5"),
+    (0.5, true, "μ_p = 0.5, seed-code convention"),
+];
+
+/// One validation figure: which points, which axes, which law.
+struct Figure {
+    file: &'static str,
+    title: &'static str,
+    x_label: &'static str,
+    y_label: &'static str,
+    /// Whether a point belongs to the figure (besides its `μ_p` group).
+    selects: fn(&PointResult) -> bool,
+    /// The control on the horizontal axis.
+    x: fn(&PointResult) -> f64,
+    /// The measurement on the vertical axis: mean and standard error.
+    y: fn(&PointResult) -> Option<(f64, f64)>,
+    /// The seed's law at `(μ_p, x)`.
+    law: fn(f64, f64) -> Option<f64>,
+    /// Where the law is drawn.
+    range: (f64, f64),
+}
+
+fn at_reference(r: &PointResult) -> bool {
+    r.spec.inertial == 0.02 && r.spec.softness == 0.01
+}
+
+fn phi_of(r: &PointResult) -> Option<(f64, f64)> {
+    let e = r.steady_state.as_ref()?.volume_fraction;
+    Some((e.mean, e.error))
+}
+
+fn mu_of(r: &PointResult) -> Option<(f64, f64)> {
+    let e = r.steady_state.as_ref()?.friction;
+    Some((e.mean, e.error))
+}
+
+const FIGURES: [Figure; 5] = [
+    Figure {
+        file: "phi_vs_bond.svg",
+        title: "φ against Bo (reversible adhesion), I = 0.02, p* = 0.01",
+        x_label: "Bond number Bo",
+        y_label: "volume fraction φ",
+        selects: at_reference,
+        x: |r| r.spec.bond,
+        y: phi_of,
+        law: |mu_p, bo| PhiLaw::for_mu_p(mu_p).map(|l| l.phi(0.02, 0.01, bo)),
+        range: (0.0, 4.0),
+    },
+    Figure {
+        file: "phi_vs_inertial.svg",
+        title: "φ against I, p* = 0.01, Bo = 0",
+        x_label: "inertial number I",
+        y_label: "volume fraction φ",
+        selects: |r| r.spec.softness == 0.01 && r.spec.bond == 0.0,
+        x: |r| r.spec.inertial,
+        y: phi_of,
+        law: |mu_p, i| PhiLaw::for_mu_p(mu_p).map(|l| l.phi(i, 0.01, 0.0)),
+        range: (0.004, 0.11),
+    },
+    Figure {
+        file: "mu_vs_inertial.svg",
+        title: "μ against I, p* = 0.01, Bo = 0",
+        x_label: "inertial number I",
+        y_label: "macroscopic friction μ",
+        selects: |r| r.spec.softness == 0.01 && r.spec.bond == 0.0,
+        x: |r| r.spec.inertial,
+        y: mu_of,
+        law: |mu_p, i| MuLaw::for_mu_p(mu_p).map(|l| l.mu(i, 0.01, 0.0)),
+        range: (0.004, 0.11),
+    },
+    Figure {
+        file: "phi_vs_softness.svg",
+        title: "φ against p*, I = 0.02, Bo = 0",
+        x_label: "softness p*",
+        y_label: "volume fraction φ",
+        selects: |r| r.spec.inertial == 0.02 && r.spec.bond == 0.0,
+        x: |r| r.spec.softness,
+        y: phi_of,
+        law: |mu_p, p| PhiLaw::for_mu_p(mu_p).map(|l| l.phi(0.02, p, 0.0)),
+        range: (0.001, 0.022),
+    },
+    Figure {
+        file: "mu_vs_softness.svg",
+        title: "μ against p*, I = 0.02, Bo = 0",
+        x_label: "softness p*",
+        y_label: "macroscopic friction μ",
+        selects: |r| r.spec.inertial == 0.02 && r.spec.bond == 0.0,
+        x: |r| r.spec.softness,
+        y: mu_of,
+        law: |mu_p, p| MuLaw::for_mu_p(mu_p).map(|l| l.mu(0.02, p, 0.0)),
+        range: (0.001, 0.022),
+    },
+];
+
+/// The validation figures (file name, SVG document): measured steady states with their
+/// standard errors against seed 000's laws, one colour per `μ_p` (and one for the seed-code
+/// contact convention). Where several runs share a point, the longest is shown. Figures
+/// without any measured point are left out.
+pub fn comparison_figures(results: &[PointResult]) -> Result<Vec<(&'static str, String)>, String> {
+    let mut out = Vec::new();
+    for fig in &FIGURES {
+        let mut markers: Vec<(&str, MeasuredPoints)> = Vec::new();
+        for &(mu_p, peculiar, label) in &FIGURE_GROUPS {
+            let mut chosen: Vec<&PointResult> = Vec::new();
+            for r in results.iter().filter(|r| {
+                r.spec.mu_p == mu_p && r.spec.peculiar_contacts == peculiar && (fig.selects)(r)
+            }) {
+                match chosen.iter_mut().find(|c| (fig.x)(c) == (fig.x)(r)) {
+                    Some(c) if c.spec.strain < r.spec.strain => *c = r,
+                    Some(_) => {}
+                    None => chosen.push(r),
+                }
+            }
+            let mut points: Vec<(f64, f64, f64)> = chosen
+                .iter()
+                .filter_map(|r| (fig.y)(r).map(|(m, e)| ((fig.x)(r), m, e)))
+                .collect();
+            points.sort_by(|a, b| a.0.total_cmp(&b.0));
+            markers.push((label, points));
+        }
+        if markers.iter().all(|(_, p)| p.is_empty()) {
+            continue;
+        }
+        let curves: Vec<(String, Vec<(f64, f64)>)> = FIGURE_GROUPS
+            .iter()
+            .filter(|(_, peculiar, _)| !peculiar)
+            .map(|&(mu_p, _, label)| {
+                let (a, b) = fig.range;
+                let points = (0..=60)
+                    .filter_map(|k| {
+                        let x = a + (b - a) * k as f64 / 60.0;
+                        (fig.law)(mu_p, x).map(|y| (x, y))
+                    })
+                    .collect();
+                (format!("seed 000 law, {label}"), points)
+            })
+            .collect();
+        let series: Vec<Series<'_>> = curves
+            .iter()
+            .map(|(label, points)| Series { label, points })
+            .collect();
+        let marks: Vec<Markers<'_>> = markers
+            .iter()
+            .map(|(label, points)| Markers { label, points })
+            .collect();
+        let labels = Labels {
+            title: fig.title,
+            x: fig.x_label,
+            y: fig.y_label,
+        };
+        out.push((fig.file, plot_svg(&labels, &series, &marks)?));
+    }
+    Ok(out)
 }
