@@ -31,6 +31,20 @@ pub struct Labels<'a> {
     pub y: &'a str,
 }
 
+/// Colour of curve or marker set `k`: dark, well separated on white, then repeating.
+fn colour(k: usize) -> RGBAColor {
+    const COLOURS: [(u8, u8, u8); 6] = [
+        (200, 30, 60),
+        (30, 140, 60),
+        (30, 80, 200),
+        (230, 130, 0),
+        (120, 60, 160),
+        (90, 90, 90),
+    ];
+    let (r, g, b) = COLOURS[k % COLOURS.len()];
+    RGBColor(r, g, b).to_rgba()
+}
+
 static FONT: Once = Once::new();
 
 fn register_font() {
@@ -110,7 +124,7 @@ pub fn plot_svg(
             .draw()
             .map_err(|e| e.to_string())?;
         for (k, s) in series.iter().enumerate() {
-            let color = Palette99::pick(k).to_rgba();
+            let color = colour(k);
             chart
                 .draw_series(LineSeries::new(
                     s.points.iter().copied(),
@@ -123,7 +137,7 @@ pub fn plot_svg(
                 });
         }
         for (k, m) in markers.iter().enumerate() {
-            let color = Palette99::pick(k).to_rgba();
+            let color = colour(k);
             chart
                 .draw_series(m.points.iter().map(|&(x, y, e)| {
                     ErrorBar::new_vertical(x, y - e.abs(), y, y + e.abs(), color.stroke_width(2), 8)
