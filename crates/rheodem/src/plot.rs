@@ -105,6 +105,9 @@ pub fn plot_svg(
         (a - d, b + d)
     };
     let ((x0, x1), (y0, y1)) = (pad(x0, x1), pad(y0, y1));
+    // Headroom above the data for the legend (upper right), so that it hides nothing.
+    let entries = (series.len() + markers.len()) as f64;
+    let y1 = y1 + (y1 - y0) * (0.08 * entries).min(0.6);
     let mut svg = String::new();
     {
         let root = SVGBackend::with_string(&mut svg, (800, 560)).into_drawing_area();
@@ -155,6 +158,7 @@ pub fn plot_svg(
         }
         chart
             .configure_series_labels()
+            .position(SeriesLabelPosition::UpperRight)
             .background_style(WHITE.mix(0.8))
             .border_style(BLACK)
             .label_font(("sans-serif", 13))
