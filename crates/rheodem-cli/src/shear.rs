@@ -312,7 +312,14 @@ pub fn sweep(path: &Path, jobs: Option<usize>, quiet: bool) -> Result<()> {
             });
         }
     });
-    let errors = errors.into_inner().unwrap_or_default();
+    let mut errors = errors.into_inner().unwrap_or_default();
+    // The archive's table lists every point archived there, whichever sweep ran it; it is
+    // rewritten only when it differs (e.g. after another sweep file added points).
+    if let Some(a) = archive.as_deref().filter(|a| a.is_dir()) {
+        if let Err(e) = refresh_archive_table(a) {
+            errors.push(format!("{e:#}"));
+        }
+    }
     let done = results
         .into_inner()
         .unwrap_or_default()
@@ -330,6 +337,17 @@ pub fn sweep(path: &Path, jobs: Option<usize>, quiet: bool) -> Result<()> {
     Ok(())
 }
 
+/// Rewrites `archive/results.csv` from the archived points if it is out of date.
+fn refresh_archive_table(archive: &Path) -> Result<()> {
+    let table = archive.join("results.csv");
+    let csv = results_csv(&read_archive(archive)?);
+    if std::fs::read_to_string(&table).ok().as_deref() != Some(csv.as_str()) {
+        write_atomic(&table, csv.as_bytes())
+            .with_context(|| format!("cannot write {}", table.display()))?;
+    }
+    Ok(())
+}
+
 /// Archives a freshly finished point as `archive/<name>.json` and rewrites
 /// `archive/results.csv` from every point archived there (whichever sweep file ran it).
 fn archive_point(archive: &Path, name: &str, result: &PointResult) -> Result<()> {
@@ -339,10 +357,7 @@ fn archive_point(archive: &Path, name: &str, result: &PointResult) -> Result<()>
     let file = archive.join(format!("{name}.json"));
     write_atomic(&file, json.as_bytes())
         .with_context(|| format!("cannot write {}", file.display()))?;
-    let table = archive.join("results.csv");
-    write_atomic(&table, results_csv(&read_archive(archive)?).as_bytes())
-        .with_context(|| format!("cannot write {}", table.display()))?;
-    Ok(())
+    refresh_archive_table(archive)
 }
 
 /// Every point result archived in `dir` as `<name>.json`, in file-name order.

@@ -211,5 +211,12 @@ fn sweep_archives_finished_points_and_does_not_rerun_them() {
         .filter(|e| e.as_ref().is_ok_and(|e| e.path().is_dir()))
         .count();
     assert_eq!(reruns, 0, "an archived point was run again");
+
+    // A stale or missing archive table is rebuilt from the archived points.
+    std::fs::remove_file(archive.join("results.csv")).expect("remove table");
+    let third = rheodem(&["sweep", &sweep, "--quiet"]);
+    assert!(third.status.success(), "{third:?}");
+    let rebuilt = std::fs::read_to_string(archive.join("results.csv")).expect("table");
+    assert_eq!(rebuilt, table);
     let _ = std::fs::remove_dir_all(&dir);
 }
