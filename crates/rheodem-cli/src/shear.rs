@@ -315,10 +315,12 @@ pub fn sweep(path: &Path, jobs: Option<usize>, quiet: bool) -> Result<()> {
     let mut errors = errors.into_inner().unwrap_or_default();
     // The archive's table lists every point archived there, whichever sweep ran it; it is
     // rewritten only when it differs (e.g. after another sweep file added points).
-    if let Some(a) = archive.as_deref().filter(|a| a.is_dir()) {
-        if let Err(e) = refresh_archive_table(a) {
-            errors.push(format!("{e:#}"));
-        }
+    if let Some(Err(e)) = archive
+        .as_deref()
+        .filter(|a| a.is_dir())
+        .map(refresh_archive_table)
+    {
+        errors.push(format!("{e:#}"));
     }
     let done = results
         .into_inner()
