@@ -58,9 +58,9 @@ enum Command {
     ShearBox(shear::ShearBoxArgs),
     /// Run a list or grid of shear-box points (resumable), collecting one results table.
     Sweep {
-        /// The sweep file (TOML).
+        /// The sweep file (TOML); its `out` and `results` paths are relative to it.
         file: PathBuf,
-        /// Points run at once (one thread each; default: all cores).
+        /// Points run at once (one thread each; default: all logical CPUs).
         #[arg(long, short)]
         jobs: Option<usize>,
         /// Less output.
@@ -80,7 +80,8 @@ enum Command {
     /// Contact-law tools: force–overlap curves, equivalent linear model.
     #[command(subcommand)]
     Contact(contact::ContactCommand),
-    /// Check a scenario and print its resolved values without running it.
+    /// Check a scenario and print its resolved values, without running it (not even its
+    /// preparation: the preparation's outcome is only known from `run`).
     Check {
         /// The scenario (TOML).
         scenario: PathBuf,
@@ -132,11 +133,35 @@ fn main() -> ExitCode {
     }
 }
 
-fn pool(threads: Option<usize>) -> Result<(rayon::ThreadPool, usize)> {
-    let n = threads.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
-    if n == 0 {
-        bail!("--threads must be at least 1");
+/// Oversubscription allowed beyond the logical CPUs (to resume, bit for bit, a run
+/// started on a larger machine); more only slows a run down.
+const MAX_THREADS_PER_CPU: usize = 4;
+
+/// Logical CPUs this process may use.
+fn cpus() -> usize {
+    std::thread::available_parallelism().map_or(1, |n| n.get())
+}
+
+/// Checks a worker count given as `flag`: at least 1, at most
+/// [`MAX_THREADS_PER_CPU`] × the logical CPUs; warns above the CPU count.
+pub(crate) fn worker_count(flag: &str, n: usize) -> Result<usize> {
+    let (cpus, max) = (cpus(), MAX_THREADS_PER_CPU * cpus());
+    if n == 0 || n > max {
+        bail!(
+            "{flag} {n}: must lie in [1, {max}] ({MAX_THREADS_PER_CPU} × the {cpus} logical CPUs of this machine)"
+        );
     }
+    if n > cpus {
+        eprintln!(
+            "warning: {flag} {n} exceeds the {cpus} logical CPUs of this machine; the run will be slower"
+        );
+    }
+    Ok(n)
+}
+
+/// A thread pool of `threads` workers (default: all logical CPUs), checked as `--threads`.
+pub(crate) fn pool(threads: Option<usize>) -> Result<(rayon::ThreadPool, usize)> {
+    let n = worker_count("--threads", threads.unwrap_or_else(cpus))?;
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(n)
         .build()
@@ -181,6 +206,9 @@ fn run(cli: Cli) -> Result<()> {
                 eprintln!("preparing {shown} …");
             }
             let mut r = pool.install(|| Run::start(sc, &base, &dir, n, force))?;
+            for w in &r.resolved.warnings {
+                eprintln!("warning: {w}");
+            }
             if !quiet {
                 eprintln!(
                     "{} free + {} wall particles, dt = {:.4e} s (t_c/{:.1}), {} steps, {} threads → {}",
@@ -201,6 +229,17 @@ fn run(cli: Cli) -> Result<()> {
             quiet,
         } => {
             let mut r = Run::resume(&dir)?;
+            if threads.is_none() && r.threads > MAX_THREADS_PER_CPU * cpus() {
+                bail!(
+                    "{} started with {} threads, more than this machine allows ({} × {} CPUs): \
+                     pass --threads N (the result then differs in the last bits from an \
+                     uninterrupted run)",
+                    dir.display(),
+                    r.threads,
+                    MAX_THREADS_PER_CPU,
+                    cpus()
+                );
+            }
             let (pool, n) = pool(threads.or(Some(r.threads)))?;
             if n != r.threads && !quiet {
                 eprintln!(
@@ -210,6 +249,9 @@ fn run(cli: Cli) -> Result<()> {
             }
             r.threads = n;
             if r.is_complete() {
+                // Rewrites the outputs of the final checkpoint (a kill may have come
+                // between the checkpoint and the summary).
+                r.advance(&dir, |_, _| {})?;
                 println!(
                     "{} is already complete ({} steps)",
                     dir.display(),
@@ -234,8 +276,14 @@ fn run(cli: Cli) -> Result<()> {
         Command::Check { scenario } => {
             let sc = Scenario::from_file(&scenario)?;
             let base = scenario.parent().unwrap_or(Path::new("."));
-            let built = rheodem::scenario::build(&sc, base)?;
-            println!("{}", serde_json::to_string_pretty(&built.resolved)?);
+            let checked = rheodem::scenario::check(&sc, base)?;
+            for w in &checked.resolved.warnings {
+                eprintln!("warning: {w}");
+            }
+            if let Some(p) = &checked.preparation {
+                eprintln!("note: not run by `check`: the preparation ({p})");
+            }
+            println!("{}", serde_json::to_string_pretty(&checked.resolved)?);
             Ok(())
         }
         Command::Bench {

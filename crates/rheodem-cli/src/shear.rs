@@ -4,9 +4,10 @@ use anyhow::{Context, Result, bail};
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 use rheodem::io::atomic::write_atomic;
+use rheodem::run::RunError;
 use rheodem::setups::shear_box::ShearBoxSpec;
 use rheodem::setups::sweep::{
-    PointResult, SweepSpec, archived, default_out, expand, results_csv, run_point,
+    POINT_FILE, PointResult, SweepSpec, archived, default_out, expand, results_csv, run_point,
 };
 use std::path::{Path, PathBuf};
 use std::sync::Mutex;
@@ -150,13 +151,7 @@ pub fn shear_box(a: ShearBoxArgs) -> Result<()> {
         .out
         .clone()
         .unwrap_or_else(|| PathBuf::from("runs/shear-box"));
-    let n = a
-        .threads
-        .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
-    if n == 0 {
-        bail!("--threads must be at least 1");
-    }
-    let pool = rayon::ThreadPoolBuilder::new().num_threads(n).build()?;
+    let (pool, n) = crate::pool(a.threads)?;
     if !a.quiet {
         eprintln!(
             "resolved: p = σ_yy target = {:.6e} Pa, γ̇ = {:.6e} 1/s, f_a^max = {:.6e} N, S_c = {:.4e} m, t_k = {:.4e} s, run {:.4e} s ({} strain)",
@@ -226,15 +221,19 @@ pub fn sweep(path: &Path, jobs: Option<usize>, quiet: bool) -> Result<()> {
     let spec: SweepSpec =
         toml::from_str(&text).map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
     let points = expand(&spec)?;
+    // Paths in the file are relative to the file, so that the sweep finds its points
+    // wherever it is started from.
+    let here = path.parent().unwrap_or(Path::new(""));
     let out = spec
         .out
         .as_ref()
-        .map_or_else(|| default_out(path), PathBuf::from);
-    let archive = spec.results.as_ref().map(PathBuf::from);
+        .map_or_else(|| default_out(path), |o| here.join(o));
+    let archive = spec.results.as_ref().map(|r| here.join(r));
+    let jobs = crate::worker_count(
+        "--jobs",
+        jobs.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get())),
+    )?;
     std::fs::create_dir_all(&out).with_context(|| format!("cannot create {}", out.display()))?;
-    let jobs = jobs
-        .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()))
-        .max(1);
     eprintln!(
         "{} points, {} at a time → {}",
         points.len(),
@@ -244,6 +243,7 @@ pub fn sweep(path: &Path, jobs: Option<usize>, quiet: bool) -> Result<()> {
     let next = AtomicUsize::new(0);
     let results: Mutex<Vec<Option<PointResult>>> = Mutex::new(vec![None; points.len()]);
     let errors: Mutex<Vec<String>> = Mutex::new(Vec::new());
+    let busy: Mutex<Vec<String>> = Mutex::new(Vec::new());
     let table = out.join("results.csv");
     std::thread::scope(|s| {
         for _ in 0..jobs.min(points.len()) {
@@ -301,10 +301,16 @@ pub fn sweep(path: &Path, jobs: Option<usize>, quiet: bool) -> Result<()> {
                                     .ok();
                             }
                         }
+                        Err(RunError::Busy(_)) => {
+                            if !quiet {
+                                eprintln!("  {name}: being run by another process; skipped");
+                            }
+                            busy.lock().map(|mut v| v.push(name.clone())).ok();
+                        }
                         Err(e) => {
                             errors
                                 .lock()
-                                .map(|mut v| v.push(format!("{name}: {e}")))
+                                .map(|mut v| v.push(format!("{name}: {e:#}")))
                                 .ok();
                         }
                     }
@@ -333,6 +339,15 @@ pub fn sweep(path: &Path, jobs: Option<usize>, quiet: bool) -> Result<()> {
         points.len(),
         table.display()
     );
+    let busy = busy.into_inner().unwrap_or_default();
+    if !busy.is_empty() {
+        println!(
+            "{} points are being run by another process ({}); run the sweep again once they \
+             finish to collect them in the table",
+            busy.len(),
+            busy.join(", ")
+        );
+    }
     if !errors.is_empty() {
         bail!("{} errors:\n{}", errors.len(), errors.join("\n"));
     }
@@ -381,9 +396,36 @@ fn read_archive(dir: &Path) -> Result<Vec<PointResult>> {
         .collect()
 }
 
+/// How far an unfinished sweep point got, from its `summary.json`.
+fn point_progress(point: &Path) -> String {
+    let Some(v) = std::fs::read_to_string(point.join("summary.json"))
+        .ok()
+        .and_then(|t| serde_json::from_str::<serde_json::Value>(&t).ok())
+    else {
+        return "started, no checkpoint yet".into();
+    };
+    let done = v["steps_done"].as_f64().unwrap_or(0.0);
+    let total = v["steps_total"].as_f64().unwrap_or(1.0).max(1.0);
+    let pct = 100.0 * done / total;
+    match v["status"].as_str() {
+        Some("failed") => format!(
+            "failed at {pct:.0} % of its steps: {}",
+            v["error"].as_str().unwrap_or("(no message)")
+        ),
+        _ => format!("{pct:.0} % of its steps (checkpointed; `rheodem sweep` resumes it)"),
+    }
+}
+
 /// Runs `compare`: the validation table of a sweep directory, plus the progress of the
 /// points still running; with `figures`, the validation figures written there as SVG.
 pub fn compare(dir: &Path, figures: Option<&Path>) -> Result<()> {
+    if dir.join("checkpoint.bin").exists() {
+        bail!(
+            "{} is the directory of a single run, not of a sweep: give the `out` directory \
+             of a sweep, or its `results` archive",
+            dir.display()
+        );
+    }
     let mut finished = Vec::new();
     let mut running = Vec::new();
     let mut entries: Vec<PathBuf> = std::fs::read_dir(dir)
@@ -405,15 +447,16 @@ pub fn compare(dir: &Path, figures: Option<&Path>) -> Result<()> {
             let r: PointResult = serde_json::from_str(&text)
                 .with_context(|| format!("{}/steady_state.json", point.display()))?;
             finished.push(r);
-        } else if let Ok(text) = std::fs::read_to_string(point.join("summary.json")) {
-            let v: serde_json::Value = serde_json::from_str(&text).unwrap_or_default();
-            let done = v["steps_done"].as_f64().unwrap_or(0.0);
-            let total = v["steps_total"].as_f64().unwrap_or(1.0).max(1.0);
-            running.push(format!(
-                "- `{name}`: {:.0} % of its steps (checkpointed; `rheodem sweep` resumes it)",
-                100.0 * done / total
-            ));
+        } else if point.join(POINT_FILE).exists() {
+            running.push(format!("- `{name}`: {}", point_progress(&point)));
         }
+    }
+    if finished.is_empty() && running.is_empty() {
+        bail!(
+            "{} holds no sweep results: give the `out` directory of a sweep, or its \
+             `results` archive",
+            dir.display()
+        );
     }
     print!(
         "{}",

@@ -37,6 +37,7 @@ struct Inputs<'a> {
     velocity: &'a [DVec3],
     omega: &'a [DVec3],
     radius: &'a [f64],
+    id: &'a [u32],
     inv_mass: &'a [f64],
     species: &'a [u16],
     offsets: &'a [u32],
@@ -72,6 +73,7 @@ pub fn pair_forces<const LEVEL: u8>(
         velocity: &particles.velocity,
         omega: &particles.angular_velocity,
         radius: &particles.radius,
+        id: &particles.id,
         inv_mass: &particles.inv_mass,
         species: &particles.species,
         offsets: slices.offsets,
@@ -217,6 +219,8 @@ fn chunk_forces<const LEVEL: u8>(
                     &kin,
                     law.elastic_energy(kin.overlap, a_i, kin.radius_j, h),
                     branch,
+                    [inp.id[i], inp.id[j]],
+                    false,
                 );
             } else if LEVEL == MEASURE_STRESS {
                 obs.stress_sum += outer(pf.force, branch);

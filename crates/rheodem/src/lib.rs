@@ -18,6 +18,7 @@ pub mod particles;
 pub mod plot;
 pub mod rheology;
 pub mod run;
+pub mod sanity;
 pub mod scenario;
 pub mod setups;
 pub mod simulation;

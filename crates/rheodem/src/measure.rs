@@ -4,6 +4,7 @@
 use crate::contact::{PairForce, PairKinematics};
 use crate::domain::Domain;
 use crate::particles::Particles;
+use crate::sanity::DeepestContact;
 use glam::{DMat3, DVec3};
 use serde::{Deserialize, Serialize};
 
@@ -29,6 +30,9 @@ pub struct ContactSums {
     pub sliding: u64,
     /// Pairs apart (`δ ≤ 0`) that still attract (open bridges, or a reversible law's range).
     pub attracting_apart: u64,
+    /// The deepest contact (largest overlap over the smaller radius).
+    #[serde(default)]
+    pub deepest: DeepestContact,
 }
 
 impl Default for ContactSums {
@@ -40,6 +44,7 @@ impl Default for ContactSums {
             contacts: 0,
             sliding: 0,
             attracting_apart: 0,
+            deepest: DeepestContact::default(),
         }
     }
 }
@@ -52,17 +57,33 @@ impl ContactSums {
         self.contacts += o.contacts;
         self.sliding += o.sliding;
         self.attracting_apart += o.attracting_apart;
+        self.deepest.merge(&o.deepest);
     }
 
     /// Adds one interacting pair: force `pf` on `i`, kinematics `k`, stored energy
-    /// `energy` (J) and branch vector `branch = r_i − r_j` (m).
+    /// `energy` (J), branch vector `branch = r_i − r_j` (m) and the partners' ids (a
+    /// particle id and a wall index if `wall`).
     #[inline]
-    pub fn add_pair(&mut self, pf: &PairForce, k: &PairKinematics, energy: f64, branch: DVec3) {
+    pub fn add_pair(
+        &mut self,
+        pf: &PairForce,
+        k: &PairKinematics,
+        energy: f64,
+        branch: DVec3,
+        pair: [u32; 2],
+        wall: bool,
+    ) {
         self.stress_sum += outer(pf.force, branch);
         self.elastic_energy += energy;
         if k.overlap > 0.0 {
             self.contacts += 1;
             self.sliding += u64::from(pf.sliding);
+            self.deepest.merge(&DeepestContact {
+                ratio: k.overlap / k.radius_i.min(k.radius_j),
+                overlap: k.overlap,
+                pair,
+                wall,
+            });
         } else {
             self.attracting_apart += 1;
         }

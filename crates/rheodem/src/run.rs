@@ -14,12 +14,15 @@
 
 use crate::Simulation;
 use crate::io::atomic::write_atomic;
+use crate::io::lock::{DirLock, LockError};
 use crate::io::{timeseries, vtk};
 use crate::measure::Observables;
 use crate::neighbor::NeighborError;
+use crate::sanity::Instability;
 use crate::scenario::{Resolved, Scenario, ScenarioError, build};
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 use std::time::Instant;
 
 /// Errors of a run.
@@ -29,15 +32,17 @@ pub enum RunError {
     #[error(transparent)]
     Scenario(#[from] ScenarioError),
     /// A file could not be written or read.
-    #[error("{path}")]
+    #[error("cannot {operation} {}: {source}", path.display())]
     Io {
+        /// What was attempted ("write", "read", "create the directory", …).
+        operation: &'static str,
         /// The file.
         path: PathBuf,
-        /// The cause.
+        /// The cause (the operating system's reason).
         source: std::io::Error,
     },
-    /// The checkpoint is unreadable or from another version.
-    #[error("{path}: not a usable checkpoint: {reason}")]
+    /// The checkpoint is unreadable, damaged or from another version.
+    #[error("{}: not a usable checkpoint: {reason}", path.display())]
     Checkpoint {
         /// The file.
         path: PathBuf,
@@ -46,27 +51,43 @@ pub enum RunError {
     },
     /// The run directory already holds a run.
     #[error(
-        "{0} already holds a run: resume it with `rheodem resume {0}`, or pass --force to start over"
+        "{} already holds a run: resume it with `rheodem resume {}`, or pass --force to start over",
+        .0.display(), .0.display()
     )]
     Exists(PathBuf),
+    /// Another process is running in the run directory.
+    #[error(
+        "{} is being run by another process (it holds {}/.lock); wait for it to finish",
+        .0.display(), .0.display()
+    )]
+    Busy(PathBuf),
     /// The run directory holds a run of another scenario than the one asked for.
     #[error(
-        "{0} holds a run of different parameters than this point (changed since it started?): \
-         remove the directory to start the point over"
+        "{} holds a run of different parameters than this point (changed since it started?): \
+         remove the directory to start the point over",
+        .0.display()
     )]
     Mismatch(PathBuf),
-    /// The state stopped being finite numbers.
+    /// The state stopped being a meaningful DEM state.
     #[error(
-        "the simulation blew up at step {step} (t = {time:e} s): non-finite energy or stress; \
-         the last checkpoint before it is kept. Usual causes: a time step too large for the \
-         stiffest contact (`run.dt`), or a prescribed motion or force far beyond the contact \
-         stiffness"
+        "the simulation became unstable at step {step} (t = {time:e} s): {cause}. {}. Usual \
+         causes: a time step too large for the stiffest contact (`run.dt`), overlapping or \
+         coincident initial positions, or velocities or a prescribed motion far beyond what \
+         the contacts can resolve",
+        match checkpoint {
+            Some(k) => format!("The last checkpoint (step {k}) predates it and is kept"),
+            None => "No checkpoint was written before it".to_string(),
+        }
     )]
-    Diverged {
-        /// Step of the first non-finite row.
+    Unstable {
+        /// Step at which the state was found unstable.
         step: u64,
-        /// Simulated time of that row (s).
+        /// Simulated time of that step (s).
         time: f64,
+        /// What is wrong, with the particles concerned.
+        cause: Instability,
+        /// Step of the last checkpoint on disk, if any.
+        checkpoint: Option<u64>,
     },
     /// The neighbour search failed (box too small).
     #[error(transparent)]
@@ -104,6 +125,8 @@ pub enum Status {
     Running,
     /// Reached its last step.
     Completed,
+    /// Stopped on an error (see the summary's `error`); resuming repeats it.
+    Failed,
 }
 
 /// Everything a run needs; serialised whole as its checkpoint.
@@ -126,6 +149,12 @@ pub struct Run {
     pub snapshots: Vec<(f64, String)>,
     /// Wall-clock seconds spent stepping, over all sessions.
     pub wall_seconds: f64,
+    /// Step of the last checkpoint written or read by this process.
+    #[serde(skip)]
+    checkpointed: Option<u64>,
+    /// The lock on the run directory, held while this run is alive.
+    #[serde(skip)]
+    lock: Option<Arc<DirLock>>,
 }
 
 /// The JSON summary.
@@ -145,23 +174,101 @@ struct Summary<'a> {
     neighbor_builds: u64,
     resolved: &'a Resolved,
     last: Option<&'a Observables>,
+    last_checkpoint_step: Option<u64>,
+    error: Option<String>,
 }
 
-/// Header of checkpoint files. The body is MessagePack with named fields, so a checkpoint
-/// stays readable when later versions add fields (with defaults) to the state.
-const CHECKPOINT_MAGIC: &[u8; 8] = b"RHEODEM2";
+/// Header of checkpoint files (format 3): these 8 bytes, the CRC-32 of the body (4 bytes,
+/// little endian), then the body: MessagePack with named fields, so a checkpoint stays
+/// readable when later versions add fields (with defaults) to the state.
+const CHECKPOINT_MAGIC: &[u8; 8] = b"RHEODEM3";
+/// Headers of earlier checkpoint formats, recognised to say so.
+const OLD_MAGICS: [&[u8; 8]; 1] = [b"RHEODEM2"];
 
-fn io_err(path: &Path) -> impl FnOnce(std::io::Error) -> RunError + '_ {
+/// An I/O error naming `operation` and `path`.
+pub fn io_err<'a>(
+    operation: &'static str,
+    path: &'a Path,
+) -> impl FnOnce(std::io::Error) -> RunError + 'a {
     move |source| RunError::Io {
+        operation,
         path: path.to_path_buf(),
         source,
     }
 }
 
+/// Takes the lock of the run directory `dir` (creating it if needed), without waiting:
+/// [`RunError::Busy`] if another process holds it.
+pub fn lock(dir: &Path) -> Result<Arc<DirLock>, RunError> {
+    std::fs::create_dir_all(dir).map_err(io_err("create the directory", dir))?;
+    match DirLock::try_acquire(dir) {
+        Ok(l) => Ok(Arc::new(l)),
+        Err(LockError::Busy(d)) => Err(RunError::Busy(d)),
+        Err(LockError::Io { path, source }) => Err(RunError::Io {
+            operation: "lock",
+            path,
+            source,
+        }),
+    }
+}
+
+/// The checkpoint file's bytes for `body`.
+fn checkpoint_bytes(body: &[u8]) -> Vec<u8> {
+    let mut bytes = Vec::with_capacity(body.len() + 12);
+    bytes.extend_from_slice(CHECKPOINT_MAGIC);
+    bytes.extend_from_slice(&crc32fast::hash(body).to_le_bytes());
+    bytes.extend_from_slice(body);
+    bytes
+}
+
+/// The verified body of a checkpoint file, or why it is unusable.
+fn checkpoint_body(bytes: &[u8]) -> Result<&[u8], String> {
+    if let Some(rest) = bytes.strip_prefix(CHECKPOINT_MAGIC.as_slice()) {
+        let (sum, body) = rest
+            .split_first_chunk::<4>()
+            .ok_or("truncated after its header")?;
+        let (stored, actual) = (u32::from_le_bytes(*sum), crc32fast::hash(body));
+        if stored != actual {
+            return Err(format!(
+                "checksum mismatch (stored {stored:08x}, computed {actual:08x}): the file is \
+                 damaged; start the run over, or restore the file from a backup"
+            ));
+        }
+        return Ok(body);
+    }
+    if OLD_MAGICS.iter().any(|m| bytes.starts_with(m.as_slice())) {
+        return Err(format!(
+            "written in an earlier checkpoint format ({}); this rheodem reads format {} \
+             only: start the run over",
+            String::from_utf8_lossy(&bytes[..8]),
+            String::from_utf8_lossy(CHECKPOINT_MAGIC)
+        ));
+    }
+    Err("missing rheodem checkpoint header".into())
+}
+
 impl Run {
     /// Builds the scenario (relative paths from `base_dir`) and creates the run directory
-    /// `dir`, refusing one that already holds a run unless `force`.
+    /// `dir`, refusing one that already holds a run unless `force` (which also removes the
+    /// old run's snapshots). The directory stays locked against other processes while the
+    /// returned run lives.
     pub fn start(
+        scenario: Scenario,
+        base_dir: &Path,
+        dir: &Path,
+        threads: usize,
+        force: bool,
+    ) -> Result<Run, RunError> {
+        let existed = dir.exists();
+        let lock = lock(dir)?;
+        Run::start_locked(lock, existed, scenario, base_dir, dir, threads, force)
+    }
+
+    /// [`Run::start`] in a directory whose `lock` the caller holds; `existed` says whether
+    /// the directory was there before (a failed start removes a directory it created).
+    pub fn start_locked(
+        lock: Arc<DirLock>,
+        existed: bool,
         scenario: Scenario,
         base_dir: &Path,
         dir: &Path,
@@ -171,8 +278,19 @@ impl Run {
         if dir.join("checkpoint.bin").exists() && !force {
             return Err(RunError::Exists(dir.to_path_buf()));
         }
-        let built = build(&scenario, base_dir)?;
-        std::fs::create_dir_all(dir.join("snapshots")).map_err(io_err(dir))?;
+        let built = match build(&scenario, base_dir) {
+            Ok(b) => b,
+            Err(e) => {
+                if !existed {
+                    drop(lock);
+                    let _ = std::fs::remove_dir_all(dir);
+                }
+                return Err(e.into());
+            }
+        };
+        let snapshots = dir.join("snapshots");
+        remove_snapshots(&snapshots)?;
+        std::fs::create_dir_all(&snapshots).map_err(io_err("create the directory", &snapshots))?;
         let steps = built.resolved.steps;
         let plan = OutputPlan {
             steps,
@@ -189,6 +307,8 @@ impl Run {
             rows: Vec::new(),
             snapshots: Vec::new(),
             wall_seconds: 0.0,
+            checkpointed: None,
+            lock: Some(lock),
         };
         let header = format!(
             "# rheodem {} (commit {}) — scenario as run, every default written out; seed {}\n",
@@ -198,27 +318,38 @@ impl Run {
         );
         let path = dir.join("scenario.toml");
         write_atomic(&path, (header + &run.scenario.to_toml()).as_bytes())
-            .map_err(io_err(&path))?;
+            .map_err(io_err("write", &path))?;
         let path = dir.join("resolved.json");
         let json = serde_json::to_string_pretty(&run.resolved).unwrap_or_default();
-        write_atomic(&path, json.as_bytes()).map_err(io_err(&path))?;
-        run.record(dir)?;
+        write_atomic(&path, json.as_bytes()).map_err(io_err("write", &path))?;
+        run.guard(dir, |run| run.record(dir))?;
         run.checkpoint(dir, Status::Running)?;
         Ok(run)
     }
 
-    /// Loads the checkpoint of the run directory `dir`.
+    /// Loads the checkpoint of the run directory `dir`, after taking the directory's lock
+    /// (so that a checkpoint is never read while another process advances it).
     pub fn resume(dir: &Path) -> Result<Run, RunError> {
         let path = dir.join("checkpoint.bin");
-        let bytes = std::fs::read(&path).map_err(io_err(&path))?;
+        if !path.exists() {
+            return Err(RunError::Checkpoint {
+                path,
+                reason: "no such file: this directory holds no rheodem run".into(),
+            });
+        }
+        Run::resume_locked(lock(dir)?, dir)
+    }
+
+    /// [`Run::resume`] of a directory whose `lock` the caller holds.
+    pub fn resume_locked(lock: Arc<DirLock>, dir: &Path) -> Result<Run, RunError> {
+        let path = dir.join("checkpoint.bin");
+        let bytes = std::fs::read(&path).map_err(io_err("read", &path))?;
         let bad = |reason: String| RunError::Checkpoint {
             path: path.clone(),
             reason,
         };
-        let body = bytes
-            .strip_prefix(CHECKPOINT_MAGIC.as_slice())
-            .ok_or_else(|| bad("missing rheodem checkpoint header".into()))?;
-        let (version, state): (String, Run) =
+        let body = checkpoint_body(&bytes).map_err(bad)?;
+        let (version, mut state): (String, Run) =
             rmp_serde::from_slice(body).map_err(|e| bad(e.to_string()))?;
         if version != crate::VERSION {
             return Err(bad(format!(
@@ -226,6 +357,8 @@ impl Run {
                 crate::VERSION
             )));
         }
+        state.checkpointed = Some(state.simulation.step);
+        state.lock = Some(lock);
         Ok(state)
     }
 
@@ -244,14 +377,42 @@ impl Run {
         self.advance_until(dir, self.plan.steps, &mut progress)
     }
 
-    /// Like [`Run::advance`] but stops after step `stop` (used to test resumption).
+    /// Like [`Run::advance`] but stops after step `stop` (used to test resumption). A run
+    /// already complete only rewrites its outputs (repairing a summary that a kill left
+    /// saying "running"). On an error the summary says "failed" and why.
     pub fn advance_until(
         &mut self,
         dir: &Path,
         stop: u64,
         progress: &mut dyn FnMut(u64, u64),
     ) -> Result<(), RunError> {
+        if self.is_complete() {
+            return self.write_outputs(dir, Status::Completed, None);
+        }
         let stop = stop.min(self.plan.steps);
+        self.guard(dir, |run| run.steps_until(dir, stop, progress))
+    }
+
+    /// Runs `f`; if it fails, records the failure in the summary before passing it on.
+    fn guard(
+        &mut self,
+        dir: &Path,
+        f: impl FnOnce(&mut Run) -> Result<(), RunError>,
+    ) -> Result<(), RunError> {
+        let outcome = f(self);
+        if let Err(e) = &outcome {
+            // The error itself matters more than a summary that cannot be written.
+            let _ = self.write_summary(dir, Status::Failed, Some(e.to_string()));
+        }
+        outcome
+    }
+
+    fn steps_until(
+        &mut self,
+        dir: &Path,
+        stop: u64,
+        progress: &mut dyn FnMut(u64, u64),
+    ) -> Result<(), RunError> {
         let mut clock = Instant::now();
         while self.simulation.step < stop {
             let next = self.simulation.step + 1;
@@ -270,12 +431,8 @@ impl Run {
                 } else {
                     Status::Running
                 };
-                if !self.simulation.particles.is_finite() {
-                    return Err(RunError::Diverged {
-                        step: next,
-                        time: self.simulation.time,
-                    });
-                }
+                // Never checkpoint a state that is not sane.
+                self.sane()?;
                 self.checkpoint(dir, status)?;
             }
             progress(next, self.plan.steps);
@@ -284,13 +441,28 @@ impl Run {
         Ok(())
     }
 
+    /// The current state's sanity as a run error.
+    fn sane(&self) -> Result<(), RunError> {
+        self.simulation
+            .check_sanity()
+            .map_err(|cause| RunError::Unstable {
+                step: self.simulation.step,
+                time: self.simulation.time,
+                cause,
+                checkpoint: self.checkpointed,
+            })
+    }
+
     /// Appends a time-series row for the current (measured) state, and a snapshot if due.
     fn record(&mut self, dir: &Path) -> Result<(), RunError> {
+        self.sane()?;
         let row = self.simulation.observables();
         if !row.is_finite() {
-            return Err(RunError::Diverged {
+            return Err(RunError::Unstable {
                 step: row.step,
                 time: row.time,
+                cause: Instability::NonFiniteMeasurement,
+                checkpoint: self.checkpointed,
             });
         }
         self.rows.push(row);
@@ -307,32 +479,47 @@ impl Run {
             &path,
             vtk::particles_vtp(&self.simulation.particles).as_bytes(),
         )
-        .map_err(io_err(&path))?;
+        .map_err(io_err("write", &path))?;
         self.snapshots.push((self.simulation.time, name));
         Ok(())
     }
 
-    /// Writes the time series, snapshot collection, summary and checkpoint.
-    fn checkpoint(&self, dir: &Path, status: Status) -> Result<(), RunError> {
-        let path = dir.join("timeseries.csv");
-        write_atomic(&path, timeseries::to_csv(&self.rows).as_bytes()).map_err(io_err(&path))?;
-        let path = dir.join("snapshots.pvd");
-        write_atomic(&path, vtk::collection_pvd(&self.snapshots).as_bytes())
-            .map_err(io_err(&path))?;
+    /// Writes the checkpoint, then the time series, snapshot collection and summary.
+    fn checkpoint(&mut self, dir: &Path, status: Status) -> Result<(), RunError> {
         let path = dir.join("checkpoint.bin");
-        let mut bytes = CHECKPOINT_MAGIC.to_vec();
-        let body = rmp_serde::to_vec_named(&(crate::VERSION.to_string(), self)).map_err(|e| {
+        let body = rmp_serde::to_vec_named(&(crate::VERSION.to_string(), &*self)).map_err(|e| {
             RunError::Checkpoint {
                 path: path.clone(),
                 reason: e.to_string(),
             }
         })?;
-        bytes.extend_from_slice(&body);
-        write_atomic(&path, &bytes).map_err(io_err(&path))?;
-        self.write_summary(dir, status)
+        write_atomic(&path, &checkpoint_bytes(&body)).map_err(io_err("write", &path))?;
+        self.checkpointed = Some(self.simulation.step);
+        self.write_outputs(dir, status, None)
     }
 
-    fn write_summary(&self, dir: &Path, status: Status) -> Result<(), RunError> {
+    /// Writes the time series, snapshot collection and summary of the state in memory.
+    fn write_outputs(
+        &self,
+        dir: &Path,
+        status: Status,
+        error: Option<String>,
+    ) -> Result<(), RunError> {
+        let path = dir.join("timeseries.csv");
+        write_atomic(&path, timeseries::to_csv(&self.rows).as_bytes())
+            .map_err(io_err("write", &path))?;
+        let path = dir.join("snapshots.pvd");
+        write_atomic(&path, vtk::collection_pvd(&self.snapshots).as_bytes())
+            .map_err(io_err("write", &path))?;
+        self.write_summary(dir, status, error)
+    }
+
+    fn write_summary(
+        &self,
+        dir: &Path,
+        status: Status,
+        error: Option<String>,
+    ) -> Result<(), RunError> {
         let done = self.simulation.step;
         let summary = Summary {
             program: "rheodem",
@@ -353,11 +540,29 @@ impl Run {
             neighbor_builds: self.simulation.neighbors.builds,
             resolved: &self.resolved,
             last: self.rows.last(),
+            last_checkpoint_step: self.checkpointed,
+            error,
         };
         let path = dir.join("summary.json");
         let json = serde_json::to_string_pretty(&summary).unwrap_or_default();
-        write_atomic(&path, json.as_bytes()).map_err(io_err(&path))
+        write_atomic(&path, json.as_bytes()).map_err(io_err("write", &path))
     }
+}
+
+/// Removes the snapshot files (`particles_*.vtp`) of an earlier run from `snapshots`.
+fn remove_snapshots(snapshots: &Path) -> Result<(), RunError> {
+    let Ok(entries) = std::fs::read_dir(snapshots) else {
+        return Ok(());
+    };
+    for entry in entries.flatten() {
+        let path = entry.path();
+        let name = entry.file_name();
+        let name = name.to_string_lossy();
+        if name.starts_with("particles_") && name.ends_with(".vtp") {
+            std::fs::remove_file(&path).map_err(io_err("remove", &path))?;
+        }
+    }
+    Ok(())
 }
 
 /// Checkpoints carry the scenario as TOML text: the binary format cannot hold its

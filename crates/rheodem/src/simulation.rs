@@ -13,6 +13,7 @@ use crate::measure::{
 };
 use crate::neighbor::{NeighborError, NeighborList};
 use crate::particles::Particles;
+use crate::sanity::{self, DeepestContact, Instability, Limits};
 use crate::stress_control::StressControl;
 use crate::walls::PlaneWall;
 use glam::DVec3;
@@ -43,6 +44,9 @@ pub struct Simulation {
     pub stress_control: Option<StressControl>,
     /// `σ_yy` (Pa) of the last force evaluation under stress control.
     pub sigma_yy: f64,
+    /// Limits of a sane state (see [`crate::sanity`]).
+    #[serde(default)]
+    pub limits: Limits,
     /// Contact sums of the last measuring force evaluation and its step.
     measured: (u64, ContactSums),
     #[serde(skip)]
@@ -75,6 +79,7 @@ impl Simulation {
             step: 0,
             stress_control: None,
             sigma_yy: 0.0,
+            limits: Limits::default(),
             measured: (0, ContactSums::default()),
             scratch: ForceScratch::default(),
         };
@@ -145,8 +150,8 @@ impl Simulation {
         } else {
             pair_forces::<MEASURE_NONE>(p, nb, laws, &images, flow, dt, scratch)
         };
-        for wall in &mut self.walls {
-            let w = wall.apply(&mut self.particles, &self.laws, self.dt);
+        for (index, wall) in self.walls.iter_mut().enumerate() {
+            let w = wall.apply(index as u32, &mut self.particles, &self.laws, self.dt);
             sums.add(&w);
         }
         add_gravity(&mut self.particles, self.gravity);
@@ -180,6 +185,25 @@ impl Simulation {
             }
         }
         if n > 0 { sum as f64 / n as f64 } else { 0.0 }
+    }
+
+    /// Checks that the state is still a meaningful DEM state (finite numbers, speeds and
+    /// overlaps within [`Simulation::limits`]); overlaps are those of the last measurement
+    /// if it was taken at the current step.
+    pub fn check_sanity(&self) -> Result<(), Instability> {
+        let deepest = (self.measured.0 == self.step).then_some(&self.measured.1.deepest);
+        sanity::check(
+            &self.particles,
+            &self.domain,
+            self.dt,
+            &self.limits,
+            deepest,
+        )
+    }
+
+    /// The deepest contact of the last measurement (zero ratio if none).
+    pub fn observables_deepest(&self) -> DeepestContact {
+        self.measured.1.deepest
     }
 
     /// Step at which the contact sums of [`Simulation::observables`] were gathered.

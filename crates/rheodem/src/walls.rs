@@ -35,9 +35,10 @@ impl PlaneWall {
     }
 
     /// Adds the wall's forces and torques to the free particles, advancing contact history
-    /// over `dt` (s).
+    /// over `dt` (s); `index` names the wall in the contact sums.
     pub fn apply(
         &mut self,
+        index: u32,
         particles: &mut Particles,
         laws: &ContactTable,
         dt: f64,
@@ -78,7 +79,14 @@ impl PlaneWall {
             particles.force[i] += f.force;
             particles.torque[i] += f.torque_i;
             let energy = law.elastic_energy(overlap, a, f64::INFINITY, h);
-            obs.add_pair(&f, &k, energy, self.normal * gap);
+            obs.add_pair(
+                &f,
+                &k,
+                energy,
+                self.normal * gap,
+                [particles.id[i], index],
+                true,
+            );
         }
         obs
     }

@@ -12,6 +12,7 @@ use crate::generate::{
 use crate::io::packing::parse_packing;
 use crate::neighbor::NeighborError;
 use crate::particles::{Motion, Particles, Sphere};
+use crate::sanity::{DEFAULT_DISPLACEMENT, DEFAULT_OVERLAP, Instability, Limits};
 use crate::stress_control::StressControl;
 use crate::timestep::{DEFAULT_FRACTION, MAX_FRACTION, shortest_contact_time};
 use crate::walls::PlaneWall;
@@ -52,8 +53,11 @@ pub struct Resolved {
     pub volume_fraction: f64,
     /// Box edge lengths at the start of the run (m).
     pub box_size: [f64; 3],
-    /// What the preparation did, if there was one.
+    /// What the preparation did, if there was one (and it ran: `check` does not run it).
     pub preparation: Option<PreparationReport>,
+    /// Doubtful but accepted input (deep initial overlaps, say).
+    #[serde(default)]
+    pub warnings: Vec<String>,
 }
 
 /// A scenario assembled into a simulation.
@@ -437,13 +441,127 @@ fn motion(key: &str, m: &MotionSpec) -> Result<Motion, ScenarioError> {
     })
 }
 
+/// A scenario validated and resolved without running anything (see [`check`]).
+pub struct Checked {
+    /// The derived values (`preparation` is `None`: it was not run).
+    pub resolved: Resolved,
+    /// The preparation the scenario asks for, in words, if any.
+    pub preparation: Option<String>,
+}
+
 /// Largest number of particles a scenario may create.
 const MAX_PARTICLES: usize = 50_000_000;
+
+/// Largest number of steps a run may take.
+pub const MAX_STEPS: u64 = 10_000_000_000_000;
+
+/// Initial overlaps beyond this fraction of the smaller radius are reported as warnings.
+const WARN_OVERLAP: f64 = 0.1;
 
 /// Validates the scenario and assembles the simulation: species, contact laws, particles
 /// (generated with the scenario seed), walls, time step; runs the preparation if any.
 /// `base_dir` resolves relative file paths.
 pub fn build(s: &Scenario, base_dir: &Path) -> Result<Built, ScenarioError> {
+    let Assembled {
+        mut simulation,
+        preparation: target,
+        context,
+    } = assemble(s, base_dir)?;
+    let preparation = match target {
+        None => None,
+        Some(p) => Some(
+            prepare(&mut simulation, p.target, p.strain_rate, p.relax_steps).map_err(
+                |e| match e {
+                    super::prepare::PrepareError::Neighbor(e) => context.box_error(e),
+                    super::prepare::PrepareError::Unreachable(msg) => {
+                        invalid("preparation", "(target)", msg)
+                    }
+                },
+            )?,
+        ),
+    };
+    configure_flow(s, &mut simulation)?;
+    let resolved = context.resolve(&simulation, preparation);
+    Ok(Built {
+        simulation,
+        resolved,
+    })
+}
+
+/// Validates the scenario and resolves its derived values like [`build`], but runs no
+/// dynamics: the preparation, if any, is described, not run.
+pub fn check(s: &Scenario, base_dir: &Path) -> Result<Checked, ScenarioError> {
+    let Assembled {
+        mut simulation,
+        preparation,
+        context,
+    } = assemble(s, base_dir)?;
+    configure_flow(s, &mut simulation)?;
+    Ok(Checked {
+        resolved: context.resolve(&simulation, None),
+        preparation: preparation.map(|p| p.description),
+    })
+}
+
+/// The preparation a scenario asks for.
+struct PlannedPreparation {
+    target: Target,
+    strain_rate: f64,
+    relax_steps: u64,
+    description: String,
+}
+
+/// What [`assemble`] knows that the resolved values need.
+struct Context {
+    seed: u64,
+    dt: f64,
+    contact_time: f64,
+    steps: u64,
+    skin: f64,
+    radius_range: [f64; 2],
+    mean_diameter: f64,
+    distribution: String,
+    size: [f64; 3],
+    warnings: Vec<String>,
+}
+
+impl Context {
+    fn box_error(&self, e: NeighborError) -> ScenarioError {
+        invalid("domain.size", format!("{:?}", self.size), e.to_string())
+    }
+
+    fn resolve(self, simulation: &Simulation, preparation: Option<PreparationReport>) -> Resolved {
+        let obs = simulation.observables();
+        Resolved {
+            version: crate::VERSION.to_string(),
+            commit: crate::COMMIT.to_string(),
+            seed: self.seed,
+            dt: self.dt,
+            contact_time: self.contact_time,
+            steps: self.steps,
+            skin: self.skin,
+            free_particles: simulation.particles.free_count(),
+            wall_particles: simulation.particles.len() - simulation.particles.free_count(),
+            radius_range: self.radius_range,
+            mean_diameter: self.mean_diameter,
+            radius_distribution: self.distribution,
+            volume_fraction: obs.volume_fraction,
+            box_size: simulation.domain.lengths().to_array(),
+            preparation,
+            warnings: self.warnings,
+        }
+    }
+}
+
+/// A validated scenario assembled into a simulation, before preparation and shear.
+struct Assembled {
+    simulation: Simulation,
+    preparation: Option<PlannedPreparation>,
+    context: Context,
+}
+
+/// Everything of [`build`] up to the preparation.
+fn assemble(s: &Scenario, base_dir: &Path) -> Result<Assembled, ScenarioError> {
     if s.species.is_empty() {
         return Err(invalid("species", "[]", "declare at least one [[species]]"));
     }
@@ -506,15 +624,31 @@ pub fn build(s: &Scenario, base_dir: &Path) -> Result<Built, ScenarioError> {
     for (k, w) in s.walls.iter().enumerate() {
         let key = format!("wall[{k}]");
         let species = species_index(&format!("{key}.species"), &w.species, &s.species)?;
-        walls.push((
-            finite3(&format!("{key}.point"), w.point)?,
-            unit3(&format!("{key}.normal"), w.normal)?,
-            species,
-        ));
+        let normal = unit3(&format!("{key}.normal"), w.normal)?;
+        // A plane that is not parallel to a periodic axis cuts through the periodic
+        // images: particles would pass it through the boundary.
+        let unit = normal.normalize();
+        for (axis, name) in ["x", "y", "z"].iter().enumerate() {
+            if s.domain.periodic[axis] && unit[axis].abs() > 1e-12 {
+                return Err(invalid(
+                    format!("{key}.normal"),
+                    format!("{:?}", w.normal),
+                    format!(
+                        "the wall is not parallel to the periodic axis {name} \
+                         (domain.periodic[{axis}] = true): its normal must have no {name} \
+                         component, or make {name} non-periodic"
+                    ),
+                ));
+            }
+        }
+        walls.push((finite3(&format!("{key}.point"), w.point)?, normal, species));
     }
 
+    // First particle id of each group, to name particles in messages.
+    let mut group_start = Vec::with_capacity(s.particles.len());
     for (k, g) in s.particles.iter().enumerate() {
         let key = format!("particles[{k}]");
+        group_start.push(particles.len() as u32);
         match g {
             ParticleGroup::Explicit {
                 species,
@@ -763,16 +897,22 @@ pub fn build(s: &Scenario, base_dir: &Path) -> Result<Built, ScenarioError> {
         (Some(t), None) => {
             let t = positive("run.duration", t)?;
             let n = (t / dt).round().max(1.0);
-            if n > 1e13 {
+            if n > MAX_STEPS as f64 {
                 return Err(invalid(
                     "run.duration",
                     t,
-                    format!("needs {n:e} steps of {dt:e} s; at most 1e13"),
+                    format!("needs {n:e} steps of {dt:e} s; at most {MAX_STEPS:e}"),
                 ));
             }
             n as u64
         }
-        (None, Some(0)) => return Err(invalid("run.steps", 0, "must be at least 1")),
+        (None, Some(n)) if n == 0 || n > MAX_STEPS => {
+            return Err(invalid(
+                "run.steps",
+                n,
+                format!("must lie in [1, {MAX_STEPS:e}]"),
+            ));
+        }
         (None, Some(n)) => n,
         _ => {
             return Err(invalid(
@@ -858,24 +998,151 @@ pub fn build(s: &Scenario, base_dir: &Path) -> Result<Built, ScenarioError> {
                 "preparation.relax_contact_times",
                 p.relax_contact_times.unwrap_or(200.0),
             )?;
-            Some((target, rate / t_c, (relax * t_c / dt).round() as u64))
+            let goal = match target {
+                Target::VolumeFraction(phi) => format!("volume fraction {phi}"),
+                Target::Pressure(pr) => format!("mean stress {pr:e} Pa"),
+            };
+            Some(PlannedPreparation {
+                target,
+                strain_rate: rate / t_c,
+                relax_steps: (relax * t_c / dt).round() as u64,
+                description: format!(
+                    "compress to {goal} at strain {rate} per contact time, then relax for \
+                     {relax} contact times"
+                ),
+            })
         }
     };
-
-    let box_error = |e: NeighborError| invalid("domain.size", format!("{size:?}"), e.to_string());
-    let mut simulation = Simulation::new(particles, domain, laws, plane_walls, gravity, dt, skin)
-        .map_err(box_error)?;
-    let preparation = match target {
-        None => None,
-        Some((target, strain_rate, relax_steps)) => Some(
-            prepare(&mut simulation, target, strain_rate, relax_steps).map_err(|e| match e {
-                super::prepare::PrepareError::Neighbor(e) => box_error(e),
-                super::prepare::PrepareError::Unreachable(msg) => {
-                    invalid("preparation", "(target)", msg)
-                }
-            })?,
-        ),
+    let limits = Limits {
+        displacement: fraction_limit(
+            "run.max_displacement",
+            s.run.max_displacement,
+            DEFAULT_DISPLACEMENT,
+        )?,
+        overlap: fraction_limit("run.max_overlap", s.run.max_overlap, DEFAULT_OVERLAP)?,
     };
+
+    let mut context = Context {
+        seed: s.seed,
+        dt,
+        contact_time: t_c,
+        steps,
+        skin,
+        radius_range: [r_min, r_max],
+        mean_diameter,
+        distribution: distribution.join("; "),
+        size,
+        warnings: Vec::new(),
+    };
+    let mut simulation = Simulation::new(particles, domain, laws, plane_walls, gravity, dt, skin)
+        .map_err(|e| context.box_error(e))?;
+    simulation.limits = limits;
+    initial_state(s, &simulation, &group_start, &mut context.warnings)?;
+    Ok(Assembled {
+        simulation,
+        preparation: target,
+        context,
+    })
+}
+
+/// An optional limit in (0, 10], or its default.
+fn fraction_limit(key: &str, value: Option<f64>, default: f64) -> Result<f64, ScenarioError> {
+    match value {
+        None => Ok(default),
+        Some(v) if v > 0.0 && v <= 10.0 => Ok(v),
+        Some(v) => Err(invalid(
+            key,
+            v,
+            "must lie in (0, 10] (a fraction of a radius)",
+        )),
+    }
+}
+
+/// The scenario's name of the particle with `id`: its group and index in the group.
+fn particle_name(s: &Scenario, group_start: &[u32], id: u32) -> String {
+    let k = group_start
+        .partition_point(|&start| start <= id)
+        .saturating_sub(1);
+    let n = id - group_start.get(k).copied().unwrap_or(0);
+    match s.particles.get(k) {
+        Some(ParticleGroup::Explicit { .. }) => format!("particles[{k}].spheres[{n}]"),
+        Some(ParticleGroup::File { path, .. }) => {
+            format!("particles[{k}] (sphere {n} of {path})")
+        }
+        Some(_) => format!("particles[{k}] (sphere {n} of the group)"),
+        None => format!("particle {id}"),
+    }
+}
+
+/// Refuses an initial state the run would stop on at once (coincident or swallowed
+/// spheres, speeds beyond `run.max_displacement`) naming the particles, and warns of
+/// initial overlaps deeper than [`WARN_OVERLAP`] of the smaller radius.
+fn initial_state(
+    s: &Scenario,
+    sim: &Simulation,
+    group_start: &[u32],
+    warnings: &mut Vec<String>,
+) -> Result<(), ScenarioError> {
+    let name = |id| particle_name(s, group_start, id);
+    let pair_name = |pair: [u32; 2], wall: bool| {
+        if wall {
+            format!("{} and wall[{}]", name(pair[0]), pair[1])
+        } else {
+            format!("{} and {}", name(pair[0]), name(pair[1]))
+        }
+    };
+    match sim.check_sanity() {
+        Ok(()) => {}
+        Err(Instability::TooDeep {
+            pair,
+            wall,
+            overlap,
+            ratio,
+            limit,
+        }) => {
+            let what = if ratio >= 2.0 {
+                "coincide (or one holds the other)"
+            } else {
+                "overlap too deeply"
+            };
+            return Err(invalid(
+                "particles",
+                pair_name(pair, wall),
+                format!(
+                    "these spheres {what}: overlap {overlap:e} m, {ratio:.3} of the smaller \
+                     radius, beyond `run.max_overlap` = {limit}; move them apart"
+                ),
+            ));
+        }
+        Err(Instability::TooFast {
+            id, speed, limit, ..
+        }) => {
+            return Err(invalid(
+                format!("{}.velocity", name(id)),
+                format!("{speed:e} m/s"),
+                format!(
+                    "moves more than `run.max_displacement` = {limit} of the smallest radius \
+                     per step at this speed; lower the speed or the time step"
+                ),
+            ));
+        }
+        Err(e) => return Err(invalid("particles", "(initial state)", e.to_string())),
+    }
+    let deepest = sim.observables_deepest();
+    if deepest.ratio > WARN_OVERLAP {
+        warnings.push(format!(
+            "{} overlap by {:.1} % of the smaller radius ({:e} m) at the start: expect a burst \
+             of elastic energy in the first steps",
+            pair_name(deepest.pair, deepest.wall),
+            100.0 * deepest.ratio,
+            deepest.overlap
+        ));
+    }
+    Ok(())
+}
+
+/// Lees-Edwards shear and stress control, after the preparation.
+fn configure_flow(s: &Scenario, simulation: &mut Simulation) -> Result<(), ScenarioError> {
     if let Some(rate) = s.domain.shear_rate {
         if !rate.is_finite() {
             return Err(invalid("domain.shear_rate", rate, "must be finite (1/s)"));
@@ -914,28 +1181,7 @@ pub fn build(s: &Scenario, base_dir: &Path) -> Result<Built, ScenarioError> {
             max_strain_per_step: 1e-4,
         });
     }
-    let obs = simulation.observables();
-    let resolved = Resolved {
-        version: crate::VERSION.to_string(),
-        commit: crate::COMMIT.to_string(),
-        seed: s.seed,
-        dt,
-        contact_time: t_c,
-        steps,
-        skin,
-        free_particles: simulation.particles.free_count(),
-        wall_particles: simulation.particles.len() - simulation.particles.free_count(),
-        radius_range: [r_min, r_max],
-        mean_diameter,
-        radius_distribution: distribution.join("; "),
-        volume_fraction: obs.volume_fraction,
-        box_size: simulation.domain.lengths().to_array(),
-        preparation,
-    };
-    Ok(Built {
-        simulation,
-        resolved,
-    })
+    Ok(())
 }
 
 fn read(base_dir: &Path, path: &str) -> Result<String, ScenarioError> {

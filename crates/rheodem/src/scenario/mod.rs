@@ -5,7 +5,7 @@ mod build;
 mod prepare;
 pub mod spec;
 
-pub use build::{Built, Resolved, build, contact_table};
+pub use build::{Built, Checked, MAX_STEPS, Resolved, build, check, contact_table};
 pub use prepare::PreparationReport;
 pub use spec::Scenario;
 

@@ -381,6 +381,14 @@ pub struct RunSpec {
     /// Time step as a fraction of the shortest contact time (default 1/50, at most 1/10).
     #[serde(default)]
     pub dt_fraction: Option<f64>,
+    /// Largest displacement of a free particle per step, relative to the mean flow, as a
+    /// fraction of the smallest radius (default 0.2); the run stops beyond it.
+    #[serde(default)]
+    pub max_displacement: Option<f64>,
+    /// Largest overlap of a contact as a fraction of the pair's smaller radius (default
+    /// 1); the run stops beyond it.
+    #[serde(default)]
+    pub max_overlap: Option<f64>,
 }
 
 /// How often to write each output, as a count over the run (at least 1 each).

@@ -374,6 +374,8 @@ impl ShearBoxSpec {
                 steps: None,
                 dt: None,
                 dt_fraction: None,
+                max_displacement: None,
+                max_overlap: None,
             },
             output: OutputSpec {
                 timeseries_rows: rows,

@@ -2,8 +2,10 @@
 //! on one thread, resumable (finished points are skipped, interrupted ones resume from
 //! their checkpoint), collected into one results table.
 //!
+//! Paths in the file (`out`, `results`) are relative to the file's directory.
+//!
 //! ```toml
-//! out = "runs/my-sweep"       # optional: default runs/<file name>
+//! out = "runs/my-sweep"       # optional: default runs/<file name> beside the file
 //! [base]                      # fields shared by every point (any ShearBoxSpec field)
 //! particles = 4096
 //! polydispersity = 3.0
@@ -18,7 +20,7 @@
 
 use super::shear_box::{ShearBoxSpec, SteadyState, steady_state};
 use crate::io::atomic::write_atomic;
-use crate::run::{Run, RunError};
+use crate::run::{Run, RunError, io_err};
 use crate::scenario::{ScenarioError, invalid};
 use serde::{Deserialize, Serialize};
 use std::fmt::Write;
@@ -28,10 +30,10 @@ use std::path::{Path, PathBuf};
 #[derive(Clone, Debug, Default, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct SweepSpec {
-    /// Output directory.
+    /// Output directory, relative to the sweep file's directory.
     #[serde(default)]
     pub out: Option<String>,
-    /// Directory where every finished point's result is also kept as `<name>.json` (e.g. in
+    /// Directory (relative to the sweep file's directory) where every finished point's result is also kept as `<name>.json` (e.g. in
     /// version control): a point found there is not run again.
     #[serde(default)]
     pub results: Option<String>,
@@ -135,6 +137,10 @@ pub struct PointResult {
     pub commit: String,
 }
 
+/// File in a point's run directory that holds its [`ShearBoxSpec`] (JSON) and marks the
+/// directory as a sweep point.
+pub const POINT_FILE: &str = "point.json";
+
 /// Runs (or resumes, or skips when finished) one point in `dir` with the current rayon
 /// pool, writing `steady_state.json` at the end.
 pub fn run_point(
@@ -145,17 +151,33 @@ pub fn run_point(
     progress: &mut dyn FnMut(u64, u64),
 ) -> Result<PointResult, RunError> {
     let result_path = dir.join("steady_state.json");
-    let finished = std::fs::read_to_string(&result_path)
-        .ok()
-        .and_then(|text| serde_json::from_str::<PointResult>(&text).ok())
-        .filter(|done| done.spec == *spec);
-    if let Some(done) = finished {
+    let finished = |path: &Path| {
+        std::fs::read_to_string(path)
+            .ok()
+            .and_then(|text| serde_json::from_str::<PointResult>(&text).ok())
+            .filter(|done| done.spec == *spec)
+    };
+    if let Some(done) = finished(&result_path) {
         return Ok(done);
     }
     let derived = spec.derive()?;
     let scenario = spec.scenario()?;
+    // The lock first, then a second look: another process may have finished the point
+    // while this one waited for nothing (the lock is never waited for).
+    let existed = dir.exists();
+    let lock = crate::run::lock(dir)?;
+    if let Some(done) = finished(&result_path) {
+        return Ok(done);
+    }
+    let marker = dir.join(POINT_FILE);
+    let text = serde_json::to_string_pretty(spec).map_err(|e| RunError::Io {
+        operation: "serialise",
+        path: marker.clone(),
+        source: e.into(),
+    })?;
+    write_atomic(&marker, text.as_bytes()).map_err(io_err("write", &marker))?;
     let mut run = if dir.join("checkpoint.bin").exists() {
-        let run = Run::resume(dir)?;
+        let run = Run::resume_locked(lock, dir)?;
         // The directory name does not encode every field (strain, material, …): a run
         // started with other values must not be continued under this point's name.
         if run.scenario != scenario {
@@ -163,7 +185,7 @@ pub fn run_point(
         }
         run
     } else {
-        Run::start(scenario, Path::new("."), dir, threads, true)?
+        Run::start_locked(lock, existed, scenario, Path::new("."), dir, threads, true)?
     };
     run.advance_until(dir, run.plan.steps, progress)?;
     let result = PointResult {
@@ -175,13 +197,11 @@ pub fn run_point(
         commit: crate::COMMIT.to_string(),
     };
     let json = serde_json::to_string_pretty(&result).map_err(|e| RunError::Io {
+        operation: "serialise",
         path: result_path.clone(),
         source: e.into(),
     })?;
-    write_atomic(&result_path, json.as_bytes()).map_err(|source| RunError::Io {
-        path: result_path.clone(),
-        source,
-    })?;
+    write_atomic(&result_path, json.as_bytes()).map_err(io_err("write", &result_path))?;
     Ok(result)
 }
 
@@ -260,10 +280,13 @@ pub fn archived(dir: &Path, name: &str, spec: &ShearBoxSpec) -> Option<PointResu
         .filter(|r| r.spec == *spec)
 }
 
-/// Default output directory of a sweep file.
+/// Default output directory of a sweep file: `runs/<file name>` beside the file.
 pub fn default_out(path: &Path) -> PathBuf {
     let stem = path
         .file_stem()
         .map_or("sweep".into(), |s| s.to_string_lossy().into_owned());
-    Path::new("runs").join(stem)
+    path.parent()
+        .unwrap_or(Path::new(""))
+        .join("runs")
+        .join(stem)
 }

@@ -1,0 +1,97 @@
+//! Advisory locks on run directories, so that several processes (two `rheodem sweep`s on
+//! one sweep file, or the array jobs of a cluster) share the points of a sweep without
+//! ever running one twice at the same time.
+//!
+//! The lock is an exclusive `flock` on `DIR/.lock`, held for as long as the [`DirLock`]
+//! lives; the operating system releases it when the process ends, however it ends (a
+//! `kill -9` leaves no stale lock behind).
+
+use std::fs::{File, OpenOptions, TryLockError};
+use std::io;
+use std::path::{Path, PathBuf};
+
+/// Name of the lock file inside a locked directory.
+pub const LOCK_FILE: &str = ".lock";
+
+/// An exclusive lock on a directory, released on drop.
+#[derive(Debug)]
+pub struct DirLock {
+    file: File,
+    path: PathBuf,
+}
+
+/// Why a directory could not be locked.
+#[derive(Debug, thiserror::Error)]
+pub enum LockError {
+    /// Another process (or another handle in this one) holds the lock.
+    #[error("{} is locked by another process", .0.display())]
+    Busy(PathBuf),
+    /// The lock file could not be opened or locked.
+    #[error("cannot lock {}: {source}", path.display())]
+    Io {
+        /// The lock file.
+        path: PathBuf,
+        /// The cause.
+        source: io::Error,
+    },
+}
+
+impl DirLock {
+    /// Takes the lock of `dir` (which must exist) without waiting.
+    pub fn try_acquire(dir: &Path) -> Result<DirLock, LockError> {
+        let path = dir.join(LOCK_FILE);
+        let file = OpenOptions::new()
+            .create(true)
+            .truncate(false)
+            .write(true)
+            .open(&path)
+            .map_err(|source| LockError::Io {
+                path: path.clone(),
+                source,
+            })?;
+        match file.try_lock() {
+            Ok(()) => Ok(DirLock { file, path }),
+            Err(TryLockError::WouldBlock) => Err(LockError::Busy(dir.to_path_buf())),
+            Err(TryLockError::Error(source)) => Err(LockError::Io { path, source }),
+        }
+    }
+
+    /// The lock file.
+    pub fn path(&self) -> &Path {
+        &self.path
+    }
+}
+
+impl Drop for DirLock {
+    fn drop(&mut self) {
+        // Closing the file releases the lock as well; unlocking first makes it immediate
+        // even if another handle to the file is still open.
+        let _ = self.file.unlock();
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_second_lock_waits_for_the_first_to_be_released() {
+        let dir = std::env::temp_dir().join(format!("rheodem-lock-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).expect("dir");
+        let first = DirLock::try_acquire(&dir).expect("free");
+        let second = DirLock::try_acquire(&dir);
+        assert!(matches!(second, Err(LockError::Busy(_))), "{second:?}");
+        drop(first);
+        DirLock::try_acquire(&dir).expect("released");
+        std::fs::remove_dir_all(&dir).ok();
+    }
+
+    #[test]
+    fn a_missing_directory_is_an_error_naming_the_lock_file() {
+        let err = DirLock::try_acquire(Path::new("/no/such/rheodem/dir")).expect_err("missing");
+        assert!(
+            err.to_string().contains("/no/such/rheodem/dir/.lock"),
+            "{err}"
+        );
+    }
+}
