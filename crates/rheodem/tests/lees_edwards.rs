@@ -272,11 +272,7 @@ fn pair_across_moving_boundary_matches_pair_inside() {
                          first evaluation |ΔF|/F = {f0:.2e}, |ΔT|/T = {t0:.2e}; \
                          200 steps |ΔF|/F_max = {ef:.2e}, |ΔT|/T_max = {et:.2e} \
                          (F_max = {fm:.3e} N, T_max = {tm:.3e} N m)",
-                        if peculiar {
-                            ", peculiar contacts"
-                        } else {
-                            ""
-                        },
+                        if peculiar { ", peculiar contacts" } else { "" },
                         shift(&domain) / SIZE.x
                     );
                     assert!(fm > 0.0, "the pair must be in contact");
