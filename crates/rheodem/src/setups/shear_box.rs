@@ -140,7 +140,7 @@ pub struct ShearBoxSpec {
     /// Checkpoints over the run.
     #[serde(default = "default_checkpoints")]
     pub checkpoints: u64,
-    /// Seed-code convention for comparison only: contact relative velocities exclude the
+    /// Peculiar contacts, for comparison only: contact relative velocities exclude the
     /// mean-flow difference (default false: lab frame; docs/model.md §4.3–4.4).
     #[serde(default)]
     pub peculiar_contacts: bool,
