@@ -17,7 +17,8 @@ pub enum ContactCommand {
     /// Drive two particles through approach, separation past the range and a second
     /// approach; write the force–overlap curve as CSV and SVG.
     Curve(CurveArgs),
-    /// The linear irreversible laws equivalent to a Willett liquid bridge (seed 002 Sect. 4).
+    /// The linear irreversible laws equivalent to a Willett liquid bridge (Roy et al. 2016,
+    /// Sect. 4; docs/model.md §2.7).
     Equivalent(EquivalentArgs),
 }
 

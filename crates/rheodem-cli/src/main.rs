@@ -67,13 +67,13 @@ enum Command {
         #[arg(long, short)]
         quiet: bool,
     },
-    /// Compare the finished points of a sweep directory with seed 000's fitted laws
-    /// (markdown table).
+    /// Compare the finished points of a sweep directory with the laws fitted by Shi et al.
+    /// 2020 (markdown table; docs/model.md §8–9).
     Compare {
         /// The sweep's output directory (or its results archive).
         dir: PathBuf,
         /// Also write the validation figures (SVG: φ and μ against Bo, I and p*, with the
-        /// seed's laws) into this directory.
+        /// paper's laws) into this directory.
         #[arg(long)]
         figures: Option<PathBuf>,
     },

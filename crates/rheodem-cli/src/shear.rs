@@ -65,7 +65,7 @@ pub struct ShearBoxArgs {
     /// Seed (0 to 2⁶³ − 1, the range a TOML file holds).
     #[arg(long, value_parser = clap::value_parser!(u64).range(..=i64::MAX as u64))]
     seed: Option<u64>,
-    /// Seed-code contact convention (relative velocities without the mean flow), for
+    /// Peculiar contacts (relative velocities without the mean flow; docs/model.md §4.4), for
     /// comparison only; `--peculiar-contacts false` overrides a config file.
     #[arg(long, num_args = 0..=1, default_missing_value = "true")]
     peculiar_contacts: Option<bool>,

@@ -3,7 +3,7 @@
 use serde::{Deserialize, Serialize};
 
 /// Mean of a correlated series with its standard error from block averaging
-/// (Flyvbjerg & Petersen): the series is coarsened by pairwise averaging, level after
+/// (Flyvbjerg & Petersen 1989): the series is coarsened by pairwise averaging, level after
 /// level, and the largest standard-error estimate over the levels that keep at least 8
 /// blocks is reported — the plateau value when the series decorrelates within the
 /// window, a conservative bound when it does not. Under 8 samples the plain standard error

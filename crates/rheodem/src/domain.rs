@@ -75,7 +75,7 @@ impl ImageTransform {
     }
 }
 
-/// Lees-Edwards boundaries in the lab-frame convention (PHYSICS §3): shear along `x`,
+/// Lees-Edwards boundaries in the lab-frame convention (docs/model.md §4.3): shear along `x`,
 /// gradient along `y`. The image across `y = L_y` is shifted by `shift` in `x` and moves
 /// `γ̇ L_y` faster in `x`.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
@@ -87,7 +87,7 @@ pub struct LeesEdwards {
     /// How often `shift` has been brought back into its range (each time the image codes
     /// of the neighbour list change meaning, so the list must be rebuilt).
     pub wraps: u64,
-    /// Seed-code convention for contacts (for comparison only): relative velocities at
+    /// "Peculiar contacts", for comparison only (docs/model.md §4.4): relative velocities at
     /// contacts exclude the mean-flow difference `γ̇ (y_i − y_j) x̂`, as in codes that move
     /// particles affinely and integrate only velocities relative to the mean flow. The
     /// default (false) is the lab frame, where damping and springs see the mean shear.
@@ -166,7 +166,7 @@ impl Domain {
     }
 
     /// Rate `γ̇` (1/s) of the mean-flow difference that contacts subtract from their
-    /// relative velocity: non-zero only under the seed-code convention.
+    /// relative velocity: non-zero only with peculiar contacts (docs/model.md §4.4).
     pub fn contact_flow_rate(&self) -> f64 {
         self.lees_edwards
             .filter(|le| le.peculiar_contacts)

@@ -1,4 +1,4 @@
-//! Observables of the particle system (PHYSICS §5): energies, stress tensor, coordination,
+//! Observables of the particle system (docs/model.md §7): energies, stress tensor, coordination,
 //! volume fraction, momenta.
 
 use crate::contact::{PairForce, PairKinematics};

@@ -1,15 +1,15 @@
-//! The rheology laws fitted in seed 000 (PHYSICS §7) with the seed's coefficients, for
-//! comparing simulations against them.
+//! The rheology laws fitted by Shi et al. 2020 (docs/model.md §8) with the paper's
+//! coefficients, for comparing simulations against them.
 //!
-//! Volume fraction (000 Eqs. 13–16):
+//! Volume fraction (Shi et al. 2020, Eqs. 13–16):
 //! `φ(I, p*, Bo) = φ_0 (1 − I/I_φ) (1 + (1+Bo) p*/p*_φ) g_c(Bo)`,
 //! `g_c = 1 + p₁ Bo + p₂ Bo² + p₃ Bo³ + p₄ Bo⁴`.
-//! Macroscopic friction (000 Eq. 1A):
+//! Macroscopic friction (Shi et al. 2020, Eq. 1A):
 //! `μ = μ_0 (1 + (μ_∞/μ_0 − 1)/(1 + I_μ/I)) (1 − sqrt((1+Bo) p*/p*_μ)) (1 + α₁ Bo^β₁)`.
 
 use serde::Serialize;
 
-/// Coefficients of the volume-fraction law for one `μ_p` (000 Tables 3 and 5).
+/// Coefficients of the volume-fraction law for one `μ_p` (Shi et al. 2020, Tables 3 and 5).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
 pub struct PhiLaw {
     /// Interparticle friction coefficient `μ_p` the row belongs to (dimensionless).
@@ -24,7 +24,8 @@ pub struct PhiLaw {
     pub gc: [f64; 4],
 }
 
-/// Coefficients of the friction law for one `μ_p` (000 Table 7, simple-shear rows).
+/// Coefficients of the friction law for one `μ_p` (Shi et al. 2020, Table 7, simple-shear
+/// rows).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
 pub struct MuLaw {
     /// Interparticle friction coefficient `μ_p` the row belongs to (dimensionless).
@@ -44,7 +45,8 @@ pub struct MuLaw {
     pub beta: f64,
 }
 
-/// Seed 000 Table 3 (`μ_p, φ_0, I_φ, p*_φ`) joined with Table 5 (`p₁ … p₄`), simple shear.
+/// Shi et al. 2020, Table 3 (`μ_p, φ_0, I_φ, p*_φ`) joined with Table 5 (`p₁ … p₄`), simple
+/// shear.
 pub const PHI_LAWS: [PhiLaw; 11] = [
     PhiLaw {
         mu_p: 0.00,
@@ -125,7 +127,7 @@ pub const PHI_LAWS: [PhiLaw; 11] = [
     },
 ];
 
-/// Seed 000 Table 7, simple-shear rows (`μ_p` = 0, 0.01, 0.5).
+/// Shi et al. 2020, Table 7, simple-shear rows (`μ_p` = 0, 0.01, 0.5).
 pub const MU_LAWS: [MuLaw; 3] = [
     MuLaw {
         mu_p: 0.00,
@@ -157,7 +159,7 @@ pub const MU_LAWS: [MuLaw; 3] = [
 ];
 
 impl PhiLaw {
-    /// The seed's row for `μ_p` (exact match within 1e-9), if tabulated.
+    /// The paper's row for `μ_p` (exact match within 1e-9), if tabulated.
     pub fn for_mu_p(mu_p: f64) -> Option<PhiLaw> {
         PHI_LAWS
             .iter()
@@ -171,7 +173,7 @@ impl PhiLaw {
         1.0 + bond * (p1 + bond * (p2 + bond * (p3 + bond * p4)))
     }
 
-    /// `φ(I, p*, Bo)` (000 Eq. 16).
+    /// `φ(I, p*, Bo)` (Shi et al. 2020, Eq. 16).
     pub fn phi(&self, inertial: f64, softness: f64, bond: f64) -> f64 {
         self.phi_0
             * (1.0 - inertial / self.i_phi)
@@ -181,7 +183,7 @@ impl PhiLaw {
 }
 
 impl MuLaw {
-    /// The seed's row for `μ_p` (exact match within 1e-9), if tabulated.
+    /// The paper's row for `μ_p` (exact match within 1e-9), if tabulated.
     pub fn for_mu_p(mu_p: f64) -> Option<MuLaw> {
         MU_LAWS
             .iter()
@@ -189,8 +191,8 @@ impl MuLaw {
             .find(|l| (l.mu_p - mu_p).abs() < 1e-9)
     }
 
-    /// `μ(I, p*, Bo)` (000 Eq. 1A), dimensionless. Meaningful for `(1 + Bo) p* < p*_μ`;
-    /// beyond it the softening factor, and the result, turn negative.
+    /// `μ(I, p*, Bo)` (Shi et al. 2020, Eq. 1A), dimensionless. Meaningful for
+    /// `(1 + Bo) p* < p*_μ`; beyond it the softening factor, and the result, turn negative.
     pub fn mu(&self, inertial: f64, softness: f64, bond: f64) -> f64 {
         let f_i = 1.0 + (self.mu_inf / self.mu_0 - 1.0) / (1.0 + self.i_mu / inertial);
         let f_p = 1.0 - ((1.0 + bond) * softness / self.p_mu).sqrt();

@@ -1,4 +1,4 @@
-//! Normal-stress control of a Lees-Edwards box (PHYSICS §3): `L_y` dilates or compacts so
+//! Normal-stress control of a Lees-Edwards box (docs/model.md §5): `L_y` dilates or compacts so
 //! that the measured `σ_yy` (kinetic + contact) holds its target.
 //!
 //! Control law, proportional on the strain rate:

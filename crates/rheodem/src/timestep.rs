@@ -1,4 +1,4 @@
-//! Time-step selection from the binary collision time (PHYSICS §1).
+//! Time-step selection from the binary collision time (docs/model.md §3.4).
 
 use crate::contact::ContactTable;
 use crate::particles::Particles;

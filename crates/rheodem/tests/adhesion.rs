@@ -1,17 +1,18 @@
-//! Adhesive contact laws against their closed forms (PHYSICS §2.3–2.5; seed 002 Sect. 4).
+//! Adhesive contact laws against their closed forms (docs/model.md §2.4–2.8; Roy et al. 2016,
+//! Sect. 4).
 //!
 //! Sign convention: normal forces are positive when repulsive; the separation of the two
 //! surfaces is `S = −δ`. On top of the linear repulsion `k_n δ` (contact only) the laws add:
-//! - **Reversible** (dry, van der Waals type, 000 Eq. 3): `−f_max` in contact,
+//! - **Reversible** (dry, van der Waals type, Shi et al. 2020, Eq. 3): `−f_max` in contact,
 //!   `−k_c δ − f_max` for `−δ_a ≤ δ < 0` (`δ_a = f_max / k_c`), zero beyond; one curve for
 //!   approach and separation, so a closed cycle does no work.
-//! - **Liquid bridge** (wet, Willett, 002 Eqs. 10–15): no attraction on approach; the bridge
-//!   forms at contact and pulls `−f_max = −2π r γ_s cos θ` there, `r = 2 a_i a_j/(a_i + a_j)`;
+//! - **Liquid bridge** (wet, Willett, Roy et al. 2016, Eqs. 10–15): no attraction on
+//!   approach; the bridge forms at contact and pulls `−f_max = −2π r γ_s cos θ` there, `r = 2 a_i a_j/(a_i + a_j)`;
 //!   on separation `−f_max / (1 + 1.05 S̄ + 2.5 S̄²)`, `S̄ = S sqrt(r / V_b)`, until it
 //!   ruptures at `S_c = (1 + θ/2) V_b^{1/3}`; then nothing until the next contact. Each
 //!   approach–separation cycle dissipates `E = ∫₀^{S_c} |f_a| dS`.
-//! - **Linear irreversible** (002 Eqs. 16–17): the bridge's loading path with a linear
-//!   separation branch `−(f_max + k_c δ)` for `−S_c ≤ δ < 0`, `S_c = f_max / k_c`; it
+//! - **Linear irreversible** (Roy et al. 2016, Eqs. 16–17): the bridge's loading path with a
+//!   linear separation branch `−(f_max + k_c δ)` for `−S_c ≤ δ < 0`, `S_c = f_max / k_c`; it
 //!   dissipates `½ f_max S_c` per cycle.
 //!
 //! The expected values below are computed from these formulas directly (the Willett energy
@@ -32,7 +33,8 @@ use std::f64::consts::PI;
 
 const A_I: f64 = 1.1e-3;
 const A_J: f64 = 0.6e-3;
-/// Surface tension (N/m), contact angle and bridge volume of seed 002's reference liquid.
+/// Surface tension (N/m), contact angle and bridge volume of the reference liquid of
+/// Roy et al. 2016.
 const GAMMA_S: f64 = 0.020;
 const THETA_DEG: f64 = 20.0;
 const V_75NL: f64 = 75e-12;
@@ -133,8 +135,8 @@ impl Expected {
     }
 
     /// `(repulsive, adhesive)` at `overlap`, updating the expected bridge state. A bridge
-    /// forms for `δ > 0`; the point `δ = 0` itself is avoided by the callers (PHYSICS reads
-    /// "δ ≥ 0", the kernel uses the contact branch for `δ > 0` only).
+    /// forms for `δ > 0`; the point `δ = 0` itself is avoided by the callers (docs/model.md §2.5
+    /// reads "δ ≥ 0", the kernel uses the contact branch for `δ > 0` only).
     fn at(&self, overlap: f64, bridge: &mut bool) -> (f64, f64) {
         if overlap > 0.0 {
             *bridge = !matches!(self, Expected::Reversible { .. });
@@ -284,16 +286,17 @@ fn forces_match_closed_forms_on_approach_and_separation() {
     }
 }
 
-/// The library's pair values are the ones of PHYSICS §2.4 (unequal radii).
+/// The library's pair values are the ones of docs/model.md §2.5 (unequal radii).
 #[test]
 fn willett_pair_values() {
     let b = bridge_law(V_75NL);
     let w = Willett::new(GAMMA_S, theta(), V_75NL, A_I, A_J);
     assert!((b.max_force(A_I, A_J) / w.f_max - 1.0).abs() < 1e-14);
     assert!((b.range() / w.s_c - 1.0).abs() < 1e-14);
-    // 75 nl, 20°: S_c = 0.4953 mm (PHYSICS §2.4's correction of the seed's "4.95 nm").
+    // 75 nl, 20°: S_c = 0.4953 mm, not the "4.95 nm" of Shi et al. 2020, Table 1
+    // (docs/model.md §2.5).
     assert!((w.s_c - 0.4953e-3).abs() < 1e-7);
-    // Equal spheres of diameter d_p: f_max = π d_p γ_s cos θ (002 Eq. 13).
+    // Equal spheres of diameter d_p: f_max = π d_p γ_s cos θ (Roy et al. 2016, Eq. 13).
     let d_p = 2.0 * A_I;
     assert!((b.max_force(A_I, A_I) / (PI * d_p * GAMMA_S * theta().cos()) - 1.0).abs() < 1e-14);
 }
@@ -340,7 +343,7 @@ fn check_hysteresis(name: &str, adhesion: Adhesion, exp: Expected) {
     push(&mut ramp(-0.1 * s_c, -(1.0 - 1e-9) * s_c, 400), &|d| {
         (sep(-d), true)
     });
-    // Exactly at S_c it still holds (PHYSICS: 0 < S ≤ S_c); just beyond it ruptures.
+    // Exactly at S_c it still holds (docs/model.md §2.5: 0 < S ≤ S_c); just beyond it ruptures.
     push(&mut [-s_c].into_iter(), &|d| (sep(-d), true));
     push(&mut [-(1.0 + 1e-9) * s_c].into_iter(), &|_| (0.0, false));
     // Back inside the range: the bridge does not re-form without contact.
@@ -516,13 +519,13 @@ fn adhesive_potential_is_consistent_with_force() {
 }
 
 // -------------------------------------------------------------------------------------
-// 4. The equivalent linear laws of seed 002 Eqs. 29 and 31.
+// 4. The equivalent linear laws of Roy et al. 2016, Eqs. 29 and 31.
 // -------------------------------------------------------------------------------------
 
-/// Seed 002's bridge volumes (nl).
+/// The bridge volumes of Roy et al. 2016 (nl).
 const VOLUMES_NL: [f64; 10] = [0.0, 1.0, 2.0, 4.2, 8.0, 14.0, 20.0, 75.0, 140.0, 200.0];
 
-/// Seed 002 Eq. 29 (equal range), ascending, with the volume of each entry (nl). The
+/// Roy et al. 2016, Eq. 29 (equal range), ascending, with the volume of each entry (nl). The
 /// stiffness falls with the volume, so the list runs from the largest volume down; it has
 /// nine entries for ten volumes, and only dropping 200 nl lines it up (checked below).
 /// `None` stands for the printed `∞` (zero volume: no bridge).
@@ -538,7 +541,7 @@ const EQ29: [(f64, Option<f64>); 9] = [
     (0.0, None),
 ];
 
-/// Seed 002 Eq. 31 (equal energy), ascending; ten entries, one per volume.
+/// Roy et al. 2016, Eq. 31 (equal energy), ascending; ten entries, one per volume.
 const EQ31: [(f64, Option<f64>); 10] = [
     (200.0, Some(0.25)),
     (140.0, Some(0.29)),
@@ -552,10 +555,10 @@ const EQ31: [(f64, Option<f64>); 10] = [
     (0.0, None),
 ];
 
-/// Entries the seed prints off by more than its rounding: (equation, volume nl, printed,
+/// Entries the paper prints off by more than its rounding: (equation, volume nl, printed,
 /// computed). The computed values agree with the independent closed form to 1e-10; the
 /// neighbouring entries of the same lists match, and no single change of parameters or
-/// rounding of `S_c` reproduces them, so these are taken as misprints in the seed:
+/// rounding of `S_c` reproduces them, so these are taken as misprints in the paper:
 /// - Eq. 29, 8 nl: `f_max/S_c = 0.5530`, printed 0.56 (1.3 % high);
 /// - Eq. 31, 20 nl: `f_max²/2E = 0.7151`, printed 0.74 (3.5 % high; 0.72 expected);
 /// - Eq. 31, 2 nl: `f_max²/2E = 2.1198`, printed 2.11 (0.46 % low; 2.12 expected).

@@ -1,4 +1,4 @@
-//! Binary collisions against the closed forms of PHYSICS §1–2.2.
+//! Binary collisions against the closed forms of docs/model.md §2.2–2.3 and §3.
 
 mod common;
 

@@ -1,4 +1,4 @@
-//! Conservation laws and determinism of the time integration (PHYSICS §1–2).
+//! Conservation laws and determinism of the time integration (docs/model.md §2–3).
 //!
 //! * **Energy.** Without damping and friction the only force is the linear spring
 //!   `f = k_n δ n`, derived from the potential `½ k_n δ²` (continuous, with a continuous force,

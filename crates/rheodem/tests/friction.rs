@@ -1,4 +1,4 @@
-//! Frictional contacts against the closed forms of PHYSICS §2.2.
+//! Frictional contacts against the closed forms of docs/model.md §2.3.
 //!
 //! All tests use the paper's frictional law (`common::frictional_law`):
 //! `k_t = (2/7) k_n`, `γ_t = (2/7) γ_n`, `μ_s = μ_d = μ`. For solid spheres this ratio makes
@@ -20,18 +20,18 @@
 //!
 //! **Sliding throughout** (`|v_t| ≥ (7/2) μ (1+e) v_n`). The tangential force is
 //! `μ |f_rep|` along `−v̂_t` the whole time, so `|v_t|` drops by `(7/2) μ ∫|f_rep| dt / m_ij`.
-//! With `∫ f_rep dt = m_ij (1+e) v_n` this is PHYSICS's **`(7/2) μ (1+e) v_n`**. Because the
-//! Coulomb limit uses the *magnitude* `|k_n δ + γ_n δ̇|` (PHYSICS §2.2), the short tensile tail
-//! of a damped contact adds to `∫|f_rep|`: with `b = −ln(e)/π`, the tail starts when `δ̈ = 0`,
-//! at phase `π − 2 atan b`, where the separation speed peaks at `e·exp(2 b atan b)·v_n`; its
+//! With `∫ f_rep dt = m_ij (1+e) v_n` this is the approximate **`(7/2) μ (1+e) v_n`** of
+//! docs/model.md §2.3. Because the Coulomb limit uses the *magnitude* `|k_n δ + γ_n δ̇|`
+//! (docs/model.md §2.3), the short tensile tail of a damped contact adds to `∫|f_rep|`:
+//! with `b = −ln(e)/π`, the tail starts when `δ̈ = 0`, at phase `π − 2 atan b`, where the separation speed peaks at `e·exp(2 b atan b)·v_n`; its
 //! impulse is `m_ij e v_n (exp(2 b atan b) − 1)`, so the exact loss is
 //! `(7/2) μ v_n [(1+e) + 2e(exp(2 b atan b) − 1)]`. The correction is 0.21 % of the loss at
 //! `e = 0.9`, 0.9 % at `e = 0.8` and 6.7 % at `e = 0.5`. The tests check the exact form
-//! tightly and PHYSICS's form only where the tail is below its tolerance.
+//! tightly and the approximate form only where the tail is below its tolerance.
 //! The same tail moves the regime boundary: sliding continues while `|v_t| ≥ (7/2) μ |δ̇|`,
 //! and in the tail the limit `μ|f_rep|` grows back from zero, so a contact slides to the end
 //! only for `|v_t| ≥ (7/2) μ (1 + 2eE) v_n`, `E = exp(2 b atan b)` (≈ `1 + 2e` instead of
-//! PHYSICS's `1 + e`); between the two it re-sticks in the tail and loses less slip.
+//! the approximate `1 + e`); between the two it re-sticks in the tail and loses less slip.
 //!
 //! **Sphere sliding on a plane** with no initial spin. Friction acts at the contact point,
 //! so the angular momentum about that point is conserved: `m v0 a = m v a + I v/a`, hence the
@@ -153,15 +153,15 @@ fn sliding_loss_exact(e: f64, mu: f64, v_n: f64) -> f64 {
 /// `|v_t| ≥ (7/2) μ |δ̇|` (the trial force must grow as fast as the limit `μ|f_rep|`). In the
 /// tensile tail both sides fall at the same rate `(7/2) μ |f_rep| / m_ij`, so the condition
 /// is set at the tail's start, where `|δ̇| = e E v_n` and `|v_t|` has lost
-/// `(7/2) μ (1 + e E) v_n`: `|v_t| ≥ (7/2) μ (1 + 2 e E) v_n`, `E = exp(2 b atan b)`. PHYSICS's
-/// `(7/2) μ (1+e) v_n` is the threshold of a limit clipped at zero tension.
+/// `(7/2) μ (1 + e E) v_n`: `|v_t| ≥ (7/2) μ (1 + 2 e E) v_n`, `E = exp(2 b atan b)`. The
+/// approximate `(7/2) μ (1+e) v_n` is the threshold of a limit clipped at zero tension.
 fn sliding_threshold(e: f64, mu: f64, v_n: f64) -> f64 {
     let b = -e.ln() / std::f64::consts::PI;
     3.5 * mu * v_n * (1.0 + 2.0 * e * (2.0 * b * b.atan()).exp())
 }
 
-/// PHYSICS §2.2's loss `(7/2) μ (1+e) v_n`.
-fn sliding_loss_physics(e: f64, mu: f64, v_n: f64) -> f64 {
+/// The approximate loss `(7/2) μ (1+e) v_n` of docs/model.md §2.3.
+fn sliding_loss_approx(e: f64, mu: f64, v_n: f64) -> f64 {
     3.5 * mu * (1.0 + e) * v_n
 }
 
@@ -224,7 +224,7 @@ fn oblique_impact_sticks_throughout() {
 /// Tolerances: 10⁻³ against the exact loss: at `t_c/1000` the end-of-contact discretisation
 /// gives ≲ 1.5·10⁻⁴ (5·10⁻⁴ at `t_c/250`), and the curvature of the relative path (centrifugal
 /// `v_t²/d` during `t_c`, relative size `(v_t/v_n)² v_n t_c / d` ≲ 3·10⁻⁴ here; measured
-/// 1.2·10⁻⁴ at the largest slip) is smaller. PHYSICS's `(7/2) μ (1+e) v_n` is checked at 0.5 % only for `e = 0.9`, where the
+/// 1.2·10⁻⁴ at the largest slip) is smaller. The approximate `(7/2) μ (1+e) v_n` is checked at 0.5 % only for `e = 0.9`, where the
 /// tensile-tail impulse it omits is 0.21 % of the loss.
 #[test]
 fn oblique_impact_slides_throughout() {
@@ -243,14 +243,14 @@ fn oblique_impact_slides_throughout() {
         let after = r.slip_after.length();
         let loss = before - after;
         let exact = sliding_loss_exact(e, mu, r.vn_before);
-        let physics = sliding_loss_physics(e, mu, r.vn_before);
+        let approx = sliding_loss_approx(e, mu, r.vn_before);
         let err_exact = (loss - exact).abs() / exact;
-        let err_physics = (loss - physics).abs() / physics;
+        let err_approx = (loss - approx).abs() / approx;
         let turn = r.slip_after.normalize().dot(r.slip_before.normalize());
         eprintln!(
             "slide e={e} mu={mu} wall={wall} v_t={factor}×threshold: loss {:.6e}, exact {:.6e} (err {:.2e}), \
-             PHYSICS (7/2)mu(1+e)v_n {:.6e} (err {:.2e}); direction cos {:.12}",
-            loss, exact, err_exact, physics, err_physics, turn
+             approximate (7/2)mu(1+e)v_n {:.6e} (err {:.2e}); direction cos {:.12}",
+            loss, exact, err_exact, approx, err_approx, turn
         );
         assert!(turn > 1.0 - 1e-6, "slip turned: cos = {turn}");
         assert!(
@@ -259,14 +259,14 @@ fn oblique_impact_slides_throughout() {
         );
         if e >= 0.9 {
             assert!(
-                err_physics < 5e-3,
-                "sliding e={e} wall={wall}: {err_physics:.3e}"
+                err_approx < 5e-3,
+                "sliding e={e} wall={wall}: {err_approx:.3e}"
             );
         }
     }
 }
 
-/// Below the tail-aware threshold, but above PHYSICS's `(7/2) μ (1+e) v_n`, a contact slides
+/// Below the tail-aware threshold, but above the approximate `(7/2) μ (1+e) v_n`, a contact slides
 /// through the compressive phase and sticks again in the tensile tail (where the Coulomb limit
 /// `μ|f_rep|` grows back from zero): the slip lost is then *less* than the exact sliding loss.
 /// This pins down the regime boundary documented in the module doc.
@@ -276,7 +276,7 @@ fn oblique_impact_resticks_in_tensile_tail_below_threshold() {
         // Halfway between the exact loss (the least slip that can slide to the end) and the
         // threshold: slides at first, re-sticks in the tail.
         let v_t = 0.5 * (sliding_loss_exact(e, mu, VN) + sliding_threshold(e, mu, VN));
-        assert!(v_t > sliding_loss_physics(e, mu, VN));
+        assert!(v_t > sliding_loss_approx(e, mu, VN));
         let r = oblique(e, mu, A_REF, A_REF, false, VN, v_t, FINE);
         let loss = r.slip_before.length() - r.slip_after.length();
         let exact = sliding_loss_exact(e, mu, r.vn_before);

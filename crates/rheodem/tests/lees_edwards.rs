@@ -1,4 +1,4 @@
-//! Lees-Edwards boundaries in the lab-frame convention (PHYSICS §3).
+//! Lees-Edwards boundaries in the lab-frame convention (docs/model.md §4.3).
 //!
 //! Shear along `x`, gradient along `y`. Velocities are full (lab) velocities; the image of a
 //! particle across `y = L_y` sits `s` further along `x` and moves `γ̇ L_y` faster along `x`,
@@ -10,9 +10,9 @@
 //!   damped law with rolling and torsion, and for a damped normal law alone, both for grains
 //!   moving with the mean flow (relative velocity across the boundary small) and for grains
 //!   at rest in the lab (relative velocity `−γ̇ L_y`); over a whole collision with list
-//!   rebuilds and a crossing in between; in the lab-frame convention and in the seed-code
-//!   comparison option `peculiar_contacts` (contacts subtract `γ̇ l_y x̂`, `l` the branch
-//!   vector through the image).
+//!   rebuilds and a crossing in between; in the lab-frame convention and in the
+//!   comparison option `peculiar_contacts` (docs/model.md §4.4: contacts subtract
+//!   `γ̇ l_y x̂`, `l` the branch vector through the image).
 //! * **Newton's third law.** The total force on the free particles of a sheared dense box is
 //!   zero to rounding; `Σ m (v_x − γ̇ (y − lo_y))`, `Σ m v_y`, `Σ m v_z` are conserved to
 //!   rounding (the plain `Σ m v_x` jumps by `m γ̇ L_y` at every crossing; that is no error).
@@ -272,11 +272,7 @@ fn pair_across_moving_boundary_matches_pair_inside() {
                          first evaluation |ΔF|/F = {f0:.2e}, |ΔT|/T = {t0:.2e}; \
                          200 steps |ΔF|/F_max = {ef:.2e}, |ΔT|/T_max = {et:.2e} \
                          (F_max = {fm:.3e} N, T_max = {tm:.3e} N m)",
-                        if peculiar {
-                            ", seed-code peculiar contacts"
-                        } else {
-                            ""
-                        },
+                        if peculiar { ", peculiar contacts" } else { "" },
                         shift(&domain) / SIZE.x
                     );
                     assert!(fm > 0.0, "the pair must be in contact");

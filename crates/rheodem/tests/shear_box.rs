@@ -1,4 +1,4 @@
-//! The stress-controlled simple shear box (PHYSICS §3, §5–6): dimensionless controls to SI
+//! The stress-controlled simple shear box (docs/model.md §5–7): dimensionless controls to SI
 //! values and back, the scenario it generates, invalid inputs, and a reduced-size steady
 //! state run (stress control reaching its target, φ and μ in a sensible range, finite
 //! error bars).
@@ -504,7 +504,7 @@ fn stress_control_reaches_its_target() {
 }
 
 /// The reduced-size steady state lands in a sensible range: `0.55 < φ < 0.66`,
-/// `0.2 < μ < 0.6` (seed 000 reports `μ ≈ 0.3–0.45`, `φ ≈ 0.58–0.61` for frictional
+/// `0.2 < μ < 0.6` (Shi et al. 2020 report `μ ≈ 0.3–0.45`, `φ ≈ 0.58–0.61` for frictional
 /// grains at `I = 0.05`, `p* = 0.01`), a coordination number between 2 and 6, with finite,
 /// positive error bars (block-averaged), and the measured `I` (from the measured `σ_yy`)
 /// within 5 % of the requested one.

@@ -66,7 +66,7 @@ fn verdict(r: &PointResult) -> String {
         .to_string()
 }
 
-/// The result with its steady-state `φ` set to `phi` and `μ` to the seed's law.
+/// The result with its steady-state `φ` set to `phi` and `μ` to the law of Shi et al. 2020.
 fn with_values(phi: f64, steady: bool) -> PointResult {
     let mut r = finished().clone();
     let p = r.spec.clone();
@@ -95,8 +95,8 @@ fn verdicts_pass_miss_and_unchecked() {
     let mut other = with_values(seed, true);
     other.spec.mu_p = 0.25;
     assert_eq!(verdict(&other), "unchecked: no fitted law for this μ_p");
-    // A cohesive point whose Δφ sign the issue names cannot pass without its Bo = 0
-    // reference.
+    // A cohesive point whose Δφ sign the validation criteria name (docs/model.md §9) cannot
+    // pass without its Bo = 0 reference.
     let mut cohesive = with_values(0.58, true);
     cohesive.spec.bond = 1.0;
     cohesive.spec.inertial = 0.02;
@@ -133,7 +133,7 @@ fn figures_show_the_points_that_belong_to_them() {
     assert_eq!(names, ["phi_vs_inertial.svg", "mu_vs_inertial.svg"]);
     for (name, svg) in &figures {
         assert!(svg.starts_with("<svg"), "{name}");
-        assert!(svg.contains("seed 000 law"), "{name}: the law is drawn");
+        assert!(svg.contains("Shi et al. 2020"), "{name}: the law is drawn");
         assert!(svg.contains("<circle"), "{name}: the point is drawn");
     }
     // No finished point, no figure.

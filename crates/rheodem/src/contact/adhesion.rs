@@ -1,4 +1,5 @@
-//! Adhesive (cohesive) normal forces, added to the repulsive normal force (PHYSICS §2.3–2.5).
+//! Adhesive (cohesive) normal forces, added to the repulsive normal force (docs/model.md
+//! §2.4–2.6).
 //!
 //! Forces are positive when repulsive, so every adhesive force here is ≤ 0. The separation
 //! of two surfaces is `S = −δ` (m). Three laws:
@@ -21,14 +22,14 @@ pub enum Adhesion {
     /// No adhesion.
     #[default]
     None,
-    /// Reversible linear adhesion (000 Eq. 3).
+    /// Reversible linear adhesion (Shi et al. 2020, Eq. 3).
     Reversible {
         /// Maximum adhesive force `f_a^max` (N).
         max_force: f64,
         /// Adhesive stiffness `k_c^a` (N/m).
         stiffness: f64,
     },
-    /// Irreversible Willett liquid bridge (002 Eqs. 10–15).
+    /// Irreversible Willett liquid bridge (Roy et al. 2016, Eqs. 10–15).
     LiquidBridge {
         /// Surface tension `γ_s` (N/m).
         surface_tension: f64,
@@ -37,7 +38,7 @@ pub enum Adhesion {
         /// Bridge volume `V_b` (m³).
         volume: f64,
     },
-    /// Irreversible linear adhesion (002 Eqs. 16–17).
+    /// Irreversible linear adhesion (Roy et al. 2016, Eqs. 16–17).
     LinearIrreversible {
         /// Maximum adhesive force `f_a^max` (N).
         max_force: f64,
@@ -215,7 +216,8 @@ mod tests {
 
     #[test]
     fn rupture_distance_matches_seed_correction() {
-        // 75 nl, θ = 20°: S_c = 0.495 mm (PHYSICS §2.4 correction of "4.95 nm").
+        // 75 nl, θ = 20°: S_c = 0.495 mm, not the "4.95 nm" of Shi et al. 2020, Table 1
+        // (docs/model.md §2.5).
         assert!((bridge().range() - 0.4953e-3).abs() < 1e-7);
     }
 

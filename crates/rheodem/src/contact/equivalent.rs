@@ -1,4 +1,5 @@
-//! The linear irreversible law equivalent to a Willett liquid bridge (seed 002 Sect. 4):
+//! The linear irreversible law equivalent to a Willett liquid bridge (Roy et al. 2016, Sect. 4;
+//! docs/model.md §2.7):
 //! same maximum force and (a) the same interaction distance, or (b) the same adhesive
 //! energy per contact `E = ∫₀^{S_c} |f_a| dS`.
 

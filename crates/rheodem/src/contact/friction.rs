@@ -1,4 +1,4 @@
-//! Spring–dashpot–Coulomb resistance with history (PHYSICS §2.2), shared by sliding
+//! Spring–dashpot–Coulomb resistance with history (docs/model.md §2.3), shared by sliding
 //! friction, rolling resistance and torsion resistance.
 
 use super::normal::Damping;

@@ -1,4 +1,4 @@
-//! Contact laws between two spheres (PHYSICS §2).
+//! Contact laws between two spheres (docs/model.md §2).
 //!
 //! A [`ContactLaw`] combines independent parts: the linear visco-elastic [`NormalLaw`],
 //! three spring–dashpot–Coulomb [`Resistance`]s (sliding, rolling, torsion) and an

@@ -1,4 +1,4 @@
-//! Linear visco-elastic normal force (PHYSICS §2.1): `f_n = k_n δ + γ_n dδ/dt`.
+//! Linear visco-elastic normal force (docs/model.md §2.2): `f_n = k_n δ + γ_n dδ/dt`.
 
 use serde::{Deserialize, Serialize};
 use std::f64::consts::PI;

@@ -67,7 +67,8 @@ pub struct Scenario {
     pub stress_control: Option<StressControlSpec>,
 }
 
-/// Proportional control of `σ_yy` (PHYSICS §3): `L̇_y/L_y = (σ_yy − target)/(modulus · time)`.
+/// Proportional control of `σ_yy` (docs/model.md §5):
+/// `L̇_y/L_y = (σ_yy − target)/(modulus · time)`.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct StressControlSpec {
@@ -101,8 +102,8 @@ pub struct DomainSpec {
     /// periodic).
     #[serde(default)]
     pub shear_rate: Option<f64>,
-    /// Seed-code convention for comparison: contacts ignore the mean-flow difference in
-    /// their relative velocity (default false: the lab frame).
+    /// Peculiar contacts, for comparison (docs/model.md §4.4): contacts ignore the mean-flow
+    /// difference in their relative velocity (default false: the lab frame, §4.3).
     #[serde(default)]
     pub peculiar_contacts: bool,
 }
@@ -140,7 +141,7 @@ pub struct ContactSpec {
     pub adhesion: Option<AdhesionSpec>,
 }
 
-/// An adhesive law (PHYSICS §2.3–2.5), chosen by `law`.
+/// An adhesive law (docs/model.md §2.4–2.6), chosen by `law`.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(tag = "law", rename_all = "snake_case", deny_unknown_fields)]
 pub enum AdhesionSpec {

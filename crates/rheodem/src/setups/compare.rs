@@ -1,10 +1,10 @@
-//! Comparison of shear-box results with the laws fitted in seed 000 (PHYSICS §7): the
-//! validation table of the shear-box issue.
+//! Comparison of shear-box results with the laws fitted by Shi et al. 2020 (docs/model.md
+//! §8): the validation table of the shear box (criteria: docs/model.md §9).
 //!
-//! Tolerances (from the issue): non-cohesive points, `φ` within 2 % of Eq. 13 and `μ`
-//! within 10 % of Eq. 1A; cohesive points, `φ` within 4 % of Eq. 16 (the seed's own model
-//! over-predicts by up to 4 % at high `Bo`). For cohesive points the sign of
-//! `Δφ = φ(Bo) − φ(0)` (same `μ_p`, `I`, `p*`) is compared with seed 000 Fig. 10:
+//! Tolerances: non-cohesive points, `φ` within 2 % of Eq. 13 and `μ` within 10 % of
+//! Eq. 1A; cohesive points, `φ` within 4 % of Eq. 16 (the paper's own model over-predicts
+//! by up to 4 % at high `Bo`). For cohesive points the sign of `Δφ = φ(Bo) − φ(0)` (same
+//! `μ_p`, `I`, `p*`) is compared with Shi et al. 2020, Fig. 10:
 //! compression (`Δφ > 0`) at `μ_p = 0.01` for `Bo` = 2 and 4, dilation (`Δφ < 0`) at
 //! `μ_p = 0.5` for `Bo` = 0.5, 1 and 2. A sign counts as measured when `|Δφ|` exceeds two
 //! combined standard errors.
@@ -18,7 +18,8 @@ use crate::plot::{Labels, Markers, Series, plot_svg};
 use crate::rheology::{MuLaw, PhiLaw};
 use std::fmt::Write;
 
-/// The sign of `Δφ` that seed 000 Fig. 10 shows, where the issue names one.
+/// The sign of `Δφ` that Shi et al. 2020, Fig. 10 shows, where the validation criteria
+/// (docs/model.md §9) name one.
 fn expected_sign(mu_p: f64, bond: f64) -> Option<f64> {
     let near = |a: f64, b: f64| (a - b).abs() < 1e-9;
     if near(mu_p, 0.01) && (near(bond, 2.0) || near(bond, 4.0)) {
@@ -30,7 +31,8 @@ fn expected_sign(mu_p: f64, bond: f64) -> Option<f64> {
     }
 }
 
-/// A markdown table comparing every finished point with the seed's laws.
+/// A markdown table comparing every finished point with the laws of Shi et al. 2020 (the
+/// columns "φ seed", "μ seed" and "Δφ sign (seed)" hold the paper's values).
 pub fn comparison_markdown(results: &[PointResult]) -> String {
     let mut s = String::from(
         "| μ_p | I | p* | Bo | law | strain | steady | φ | φ seed | dev | tol | μ | μ seed | dev | tol | Δφ | Δφ sign (seed) | verdict |\n\
@@ -53,7 +55,7 @@ pub fn comparison_markdown(results: &[PointResult]) -> String {
         let phi_seed = phi_law.map(|l| l.phi(p.inertial, p.softness, p.bond));
         let phi_tol = if p.bond > 0.0 { 0.04 } else { 0.02 };
         let phi_dev = phi_seed.map(|f| phi.mean / f - 1.0);
-        // The friction law is checked for non-cohesive points only (the issue's list).
+        // The friction law is checked for non-cohesive points only (docs/model.md §9).
         let mu_seed = if p.bond == 0.0 {
             mu_law.map(|l| l.mu(p.inertial, p.softness, 0.0))
         } else {
@@ -167,7 +169,7 @@ pub fn comparison_markdown(results: &[PointResult]) -> String {
 /// Measured points `(x, mean, standard error)` of one group in a figure.
 type MeasuredPoints = Vec<(f64, f64, f64)>;
 
-/// The points of the validation figures: measured points against the seed's laws.
+/// The points of the validation figures: measured points against the laws of Shi et al. 2020.
 const FIGURE_GROUPS: [(f64, bool, &str); 3] = [
     (0.01, false, "μ_p = 0.01"),
     (0.5, false, "μ_p = 0.5"),
@@ -186,7 +188,7 @@ struct Figure {
     x: fn(&PointResult) -> f64,
     /// The measurement on the vertical axis: mean and standard error.
     y: fn(&PointResult) -> Option<(f64, f64)>,
-    /// The seed's law at `(μ_p, x)`.
+    /// The paper's law at `(μ_p, x)`.
     law: fn(f64, f64) -> Option<f64>,
     /// Where the law is drawn.
     range: (f64, f64),
@@ -265,9 +267,10 @@ const FIGURES: [Figure; 5] = [
 ];
 
 /// The validation figures (file name, SVG document): measured steady states with their
-/// standard errors against seed 000's laws, one colour per `μ_p` (and one for the seed-code
-/// contact convention). Where several runs share a point, the longest is shown. Figures
-/// without any measured point are left out.
+/// standard errors against the laws of Shi et al. 2020, one colour per `μ_p` (and one for
+/// peculiar contacts, labelled "seed-code convention"; docs/model.md §4.4). Where several
+/// runs share a point, the longest is shown. Figures without any measured point are left
+/// out.
 pub fn comparison_figures(results: &[PointResult]) -> Result<Vec<(&'static str, String)>, String> {
     let mut out = Vec::new();
     for fig in &FIGURES {
@@ -304,7 +307,7 @@ pub fn comparison_figures(results: &[PointResult]) -> Result<Vec<(&'static str, 
                         (fig.law)(mu_p, x).map(|y| (x, y))
                     })
                     .collect();
-                (format!("seed 000 law, {label}"), points)
+                (format!("Shi et al. 2020, {label}"), points)
             })
             .collect();
         let series: Vec<Series<'_>> = curves

@@ -1,8 +1,8 @@
-//! The stress-controlled simple shear box, the "rheometer" (PHYSICS §3, seed 000 Sect.
-//! 2.1.1): N polydisperse spheres in a Lees-Edwards box sheared at `γ̇` along `x` with
+//! The stress-controlled simple shear box, the "rheometer" (docs/model.md §6; Shi et al.
+//! 2020, Sect. 2.1.1): N polydisperse spheres in a Lees-Edwards box sheared at `γ̇` along `x` with
 //! gradient `y`, `σ_yy` held at `p` by letting `L_y` breathe.
 //!
-//! The user gives the dimensionless controls (PHYSICS §6) — `μ_p`, `I`, `p*`, `Bo`, the
+//! The user gives the dimensionless controls (docs/model.md §6.2) — `μ_p`, `I`, `p*`, `Bo`, the
 //! cohesion law — and optionally the material; this module derives `p = p* k_n / d_p`,
 //! `γ̇ = I sqrt(p/ρ_p) / d_p`, `f_a^max = Bo p d_p²` and writes an ordinary
 //! [`Scenario`] (so runs, checkpoints and outputs are those of any scenario).
@@ -35,7 +35,7 @@ pub enum Cohesion {
     LinearIrreversible,
 }
 
-/// Contact angle of the liquid-bridge option (degrees), as in the seeds.
+/// Contact angle of the liquid-bridge option (degrees), as in Shi et al. 2020 and Roy et al. 2016.
 const BRIDGE_ANGLE_DEG: f64 = 20.0;
 
 fn default_range() -> f64 {
@@ -140,8 +140,8 @@ pub struct ShearBoxSpec {
     /// Checkpoints over the run.
     #[serde(default = "default_checkpoints")]
     pub checkpoints: u64,
-    /// Seed-code convention for comparison only: contact relative velocities exclude the
-    /// mean-flow difference (default false: lab frame, PHYSICS §3).
+    /// Peculiar contacts, for comparison only: contact relative velocities exclude the
+    /// mean-flow difference (default false: lab frame; docs/model.md §4.3–4.4).
     #[serde(default)]
     pub peculiar_contacts: bool,
 }
@@ -237,7 +237,7 @@ impl ShearBoxSpec {
         }
         // Lees-Edwards needs the sheared box at least three neighbour cells wide; a cell
         // holds the largest pair plus the attraction range and the skin (0.1 d_p). The
-        // box edge is estimated at φ = 0.75, above every steady state of the seeds.
+        // box edge is estimated at φ = 0.75, above every steady state of Shi et al. 2020.
         let (_, r_max) = radius_bounds(d, self.polydispersity);
         let reach = match self.cohesion {
             Cohesion::LiquidBridge | Cohesion::LinearIrreversible => range * d,

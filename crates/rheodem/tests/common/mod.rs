@@ -127,7 +127,7 @@ pub fn random_vec(rng: &mut Xoshiro256PlusPlus, s: f64) -> DVec3 {
 /// Tangential part of the relative velocity of the two surfaces at the contact point of
 /// spheres `i` and `j`: `v_c = (v_i − v_j) − (l_i ω_i + l_j ω_j) × n`, `n` the unit normal
 /// from `j` to `i` and `l` the lever arms (the radii when the spheres just touch), with the
-/// normal component removed. This is the `v_t` of PHYSICS §2.2.
+/// normal component removed. This is the `v_t` of docs/model.md §2.1.
 pub fn contact_slip(v_rel: DVec3, w_i: DVec3, w_j: DVec3, l_i: f64, l_j: f64, n: DVec3) -> DVec3 {
     let v_c = v_rel - (l_i * w_i + l_j * w_j).cross(n);
     v_c - n * n.dot(v_c)
