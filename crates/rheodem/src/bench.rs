@@ -1,4 +1,4 @@
-//! The standard throughput problem of `shared/bench/` (4096 polydisperse spheres at
+//! The standard throughput problem of `BENCHMARKS.md` (4096 polydisperse spheres at
 //! `φ = 0.62`, Hooke + tangential history, `μ = 0.5`, `dt = 3.2·10⁻⁴`, model units).
 //!
 //! As in the LAMMPS input, the packing starts from the affine profile `v_x = γ̇ y` and is
@@ -13,10 +13,13 @@ use glam::DVec3;
 use std::time::{Duration, Instant};
 
 /// One-line description of the problem as run here.
-pub const DESCRIPTION: &str = "shared/bench packing, 4096 spheres, phi = 0.62, Hooke + tangential history, \
-mu = 0.5, dt = 3.2e-4, Lees-Edwards shear at rate 1 from the affine profile v_x = y";
+pub const DESCRIPTION: &str = "standard packing (crates/rheodem/data/bench-packing.txt), \
+4096 spheres, phi = 0.62, Hooke + tangential history, mu = 0.5, dt = 3.2e-4, Lees-Edwards shear \
+at rate 1 from the affine profile v_x = y";
 
-/// The packing of `shared/bench/packing.txt`, shipped with the crate.
+/// The standard packing, `data/bench-packing.txt`, shipped with the crate: first line
+/// `# L <edge> N <count> phi <φ>`, then `diameter x y z` per sphere (density 1).
+/// `benches/peers/lammps_data.py` turns the same file into LAMMPS's data file.
 pub const PACKING: &str = include_str!("../data/bench-packing.txt");
 
 /// The bench's contact law: `k_n = 10⁴`, `k_t = 2/7 k_n`, `γ_n = 27.6941 m_ij`, no
