@@ -2,9 +2,11 @@
 # benches/peers/run.sh — LAMMPS vs rheodem on the standard throughput problem.
 #
 # Runs, in one go and on the same machine:
-#   * LAMMPS (Debian package, `pair_style gran/hooke/history`) on the shared input
-#     ../shared/bench/lammps-in.shear, on 1 rank (plain `lmp`) and 2 MPI ranks
-#     (`mpirun -np 2 lmp`), with 2000 warm-up steps then 3000 timed steps;
+#   * LAMMPS (Debian package, `pair_style gran/hooke/history`) on the input
+#     benches/peers/lammps-in.shear, on 1 rank (plain `lmp`) and 2 MPI ranks
+#     (`mpirun -np 2 lmp`), with 2000 warm-up steps then 3000 timed steps; its data file
+#     bench.data is generated at each run, in the temp dir, from the packing the repository
+#     ships (crates/rheodem/data/bench-packing.txt) by benches/peers/lammps_data.py;
 #   * rheodem's own benchmark, `cargo run --release -p rheodem-cli -- bench --threads N`,
 #     for N = 1 and 2;
 # and prints a markdown block (table + machine + exact commands) for BENCHMARKS.md.
@@ -18,7 +20,8 @@
 # drifts in background load hit all configurations alike; the table shows the median.
 #
 # Environment (all optional):
-#   BENCH_DIR      folder with bench.data + lammps-in.shear   (default: <repo>/../shared/bench)
+#   LAMMPS_INPUT   LAMMPS input                               (default: <script dir>/lammps-in.shear)
+#   PYTHON         Python 3 for lammps_data.py                (default: python3)
 #   REPEATS        repetitions per configuration              (default: 3)
 #   NWARM, NRUN    LAMMPS warm-up / timed steps               (default: 2000 / 3000)
 #   LMP            LAMMPS binary                              (default: first of lmp, lmp_serial,
@@ -31,8 +34,13 @@
 #   PROBE_TIMEOUT  seconds allowed for `rheodem bench --help` (default: 300; it may rebuild)
 #   KEEP_TMP=1     keep the temp dir with every raw log
 #
-# Needs no network except apt (only when LAMMPS is missing). Exit status is 0 as long as at
-# least the LAMMPS half ran; a missing/broken rheodem `bench` subcommand is reported, not fatal.
+# The packing is not a setting: rheodem's `bench` has the same file built in, and the two
+# codes must run the same spheres.
+#
+# Everything it needs is in the repository. It needs Python 3 (standard library only) for the
+# LAMMPS half, and no network except apt (only when LAMMPS is missing). Exit status is 0 as
+# long as at least the LAMMPS half ran; a missing/broken rheodem `bench` subcommand is
+# reported, not fatal.
 
 set -euo pipefail
 
@@ -41,7 +49,9 @@ set -euo pipefail
 # ---------------------------------------------------------------------------------------
 SCRIPT_DIR=$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)
 REPO_ROOT=$(git -C "$SCRIPT_DIR" rev-parse --show-toplevel)
-BENCH_DIR=${BENCH_DIR:-"$REPO_ROOT/../shared/bench"}
+PACKING="$REPO_ROOT/crates/rheodem/data/bench-packing.txt"   # also built into `rheodem bench`
+LAMMPS_INPUT=${LAMMPS_INPUT:-"$SCRIPT_DIR/lammps-in.shear"}
+PYTHON=${PYTHON:-python3}
 REPEATS=${REPEATS:-3}
 NWARM=${NWARM:-2000}
 NRUN=${NRUN:-3000}
@@ -60,16 +70,29 @@ log() { printf '[peers] %s\n' "$*" >&2; }
 die() { printf '[peers] ERROR: %s\n' "$*" >&2; exit 1; }
 
 [[ "$REPEATS" =~ ^[1-9][0-9]*$ ]] || die "REPEATS must be a positive integer (got '$REPEATS')"
-BENCH_DIR=$(cd "$BENCH_DIR" 2>/dev/null && pwd) || die "BENCH_DIR not found"
-for f in bench.data lammps-in.shear; do
-    [[ -r "$BENCH_DIR/$f" ]] || die "$BENCH_DIR/$f missing (set BENCH_DIR)"
-done
+if [[ "$SKIP_LAMMPS" != 1 ]]; then
+    [[ -r "$PACKING" ]] || die "packing $PACKING not found or not readable"
+    [[ -r "$LAMMPS_INPUT" ]] || die "LAMMPS input $LAMMPS_INPUT not found or not readable (set LAMMPS_INPUT)"
+    command -v "$PYTHON" >/dev/null 2>&1 \
+        || die "no '$PYTHON' on PATH: Python 3 is needed to write the LAMMPS data file (set PYTHON)"
+fi
+# Paths as shown in the report: relative to the repository root when they lie inside.
+PACKING_SHOWN=${PACKING#"$REPO_ROOT"/}
+LAMMPS_INPUT_SHOWN=${LAMMPS_INPUT#"$REPO_ROOT"/}
 
 TMP=$(mktemp -d "${TMPDIR:-/tmp}/rheodem-peers.XXXXXX")
 cleanup() {
     if [[ "$KEEP_TMP" == 1 ]]; then log "raw logs kept in $TMP"; else rm -rf "$TMP"; fi
 }
 trap cleanup EXIT
+
+# The LAMMPS data file, written once per run from the packing (atom_style sphere, zero-tilt
+# triclinic box); lammps_data.py says what is wrong if the packing is missing or malformed.
+if [[ "$SKIP_LAMMPS" != 1 ]]; then
+    "$PYTHON" "$SCRIPT_DIR/lammps_data.py" "$PACKING" "$TMP/bench.data" \
+        || die "could not write the LAMMPS data file from $PACKING (see above)"
+    cp "$LAMMPS_INPUT" "$TMP/lammps-in.shear"
+fi
 
 # ---------------------------------------------------------------------------------------
 # Small numeric helpers (awk does the floating point)
@@ -181,8 +204,8 @@ lammps_cmd() {
 run_lammps() {
     local n=$1 rep=$2 dir="$TMP/lammps-np$1-rep$2" line x procs steps atoms
     mkdir -p "$dir"
-    cp "$BENCH_DIR/bench.data" "$BENCH_DIR/lammps-in.shear" "$dir/"
-    # shellcheck disable=SC2046  # the command string is split on purpose
+    cp "$TMP/bench.data" "$TMP/lammps-in.shear" "$dir/"
+    # shellcheck disable=SC2046,SC2091  # the command string is split and run on purpose
     if ! (cd "$dir" && $(lammps_cmd "$n")) >"$dir/stdout.txt" 2>&1; then
         log "LAMMPS np=$n rep=$rep failed; last lines:"; tail -n 15 "$dir/stdout.txt" >&2
         return 1
@@ -205,7 +228,7 @@ rheodem_cmd() { echo "cargo run --release -p rheodem-cli -- bench --threads $1";
 # run_rheodem N REP
 run_rheodem() {
     local n=$1 rep=$2 out="$TMP/rheodem-t$1-rep$2.txt" v
-    # shellcheck disable=SC2046
+    # shellcheck disable=SC2046,SC2091  # the command string is split and run on purpose
     # stdout and stderr together: the `throughput:` line is accepted from either.
     if ! (cd "$REPO_ROOT" && $(rheodem_cmd "$n")) >"$out" 2>&1; then
         log "rheodem threads=$n rep=$rep failed; last lines:"; tail -n 15 "$out" >&2
@@ -277,7 +300,7 @@ echo "- load average (1/5/15 min) before: $LOAD_BEFORE, after: $LOAD_AFTER"
 if awk -v l="${LOAD_BEFORE%% *}" 'BEGIN { exit !(l > 0.5) }'; then
     echo "- **warning: the machine was not idle (1-min load ${LOAD_BEFORE%% *} > 0.5); the 2-rank/2-thread figures are unreliable**"
 fi
-echo "- problem: $BENCH_DIR (4096 spheres, phi 0.62, Lees-Edwards shear); $NWARM warm-up + $NRUN timed steps"
+echo "- problem: $PACKING_SHOWN (4096 spheres, phi 0.62, Lees-Edwards shear); $NWARM warm-up + $NRUN timed steps"
 echo "- repetitions: $REPEATS per configuration, interleaved; table shows the median"
 if [[ -n "$LMP_VERSION" ]]; then
     echo "- LAMMPS: $LMP_VERSION; MPI launcher: ${MPI_CMD[*]:-none}; OMP_NUM_THREADS=1"
@@ -331,16 +354,19 @@ if [[ "$SKIP_RHEODEM" != 1 && "$RHEODEM_OK" != 1 ]]; then
     echo "**rheodem not measured:** $RHEODEM_WHY."
 fi
 echo
-echo "Commands (each in a fresh copy of the bench folder for LAMMPS; in the repo root for rheodem):"
+echo "Commands (from the repo root; each LAMMPS run in a fresh copy of the folder D):"
 echo
 echo '```sh'
 echo "export OMP_NUM_THREADS=1"
 if [[ "$SKIP_LAMMPS" != 1 ]]; then
+    echo "python3 benches/peers/lammps_data.py $PACKING_SHOWN D/bench.data"
+    echo "cp $LAMMPS_INPUT_SHOWN D/lammps-in.shear && cd D"
     for n in "${COUNTS[@]}"; do
         if ((n == 1)) || ((${#MPI_CMD[@]} > 0)); then lammps_cmd "$n"; fi
     done
 fi
 if [[ "$SKIP_RHEODEM" != 1 ]]; then
+    [[ "$SKIP_LAMMPS" == 1 ]] || echo "cd -"
     for n in "${COUNTS[@]}"; do rheodem_cmd "$n"; done
 fi
 echo '```'

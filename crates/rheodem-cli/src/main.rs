@@ -86,7 +86,8 @@ enum Command {
         /// The scenario (TOML).
         scenario: PathBuf,
     },
-    /// Throughput on the standard problem of shared/bench (particle-steps per second).
+    /// Throughput on the standard problem (crates/rheodem/data/bench-packing.txt, see
+    /// BENCHMARKS.md), in particle-steps per second.
     Bench {
         /// Thread counts to measure (default: 1 and all cores).
         #[arg(long, short, value_delimiter = ',')]
