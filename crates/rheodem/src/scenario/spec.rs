@@ -49,7 +49,7 @@ pub struct Scenario {
     #[serde(default, rename = "wall")]
     pub walls: Vec<WallSpec>,
     /// Gravitational acceleration (m/s²).
-    #[serde(default)]
+    #[serde(default, deserialize_with = "three")]
     pub gravity: [f64; 3],
     /// Optional compression of a loose packing before the run.
     #[serde(default)]
@@ -89,13 +89,13 @@ fn default_seed() -> u64 {
 #[serde(deny_unknown_fields)]
 pub struct DomainSpec {
     /// Lower corner (m); default the origin.
-    #[serde(default)]
+    #[serde(default, deserialize_with = "three")]
     pub lo: [f64; 3],
     /// Edge lengths (m). May be omitted when a packing file gives its box edge.
-    #[serde(default)]
+    #[serde(default, deserialize_with = "three_opt")]
     pub size: Option<[f64; 3]>,
     /// Periodicity of `x`, `y`, `z`.
-    #[serde(default)]
+    #[serde(default, deserialize_with = "three")]
     pub periodic: [bool; 3],
     /// Lees-Edwards shear rate `γ̇` (1/s): shear along `x`, gradient `y`, switched on after
     /// the preparation with the affine profile `v_x += γ̇ (y − lo_y)` (needs `x`, `y`
@@ -238,8 +238,10 @@ pub enum MotionSpec {
     /// Rotates rigidly (wall particle).
     Rotating {
         /// A point on the axis (m).
+        #[serde(deserialize_with = "three")]
         center: [f64; 3],
         /// Axis direction (normalised on use).
+        #[serde(deserialize_with = "three")]
         axis: [f64; 3],
         /// Angular velocity (rad/s).
         omega: f64,
@@ -253,12 +255,13 @@ pub struct SphereSpec {
     /// Radius (m), positive.
     pub radius: f64,
     /// Centre (m).
+    #[serde(deserialize_with = "three")]
     pub position: [f64; 3],
     /// Velocity (m/s).
-    #[serde(default)]
+    #[serde(default, deserialize_with = "three")]
     pub velocity: [f64; 3],
     /// Angular velocity (rad/s).
-    #[serde(default)]
+    #[serde(default, deserialize_with = "three")]
     pub angular_velocity: [f64; 3],
 }
 
@@ -310,10 +313,13 @@ pub enum ParticleGroup {
         /// Species name.
         species: String,
         /// Corner of the parallelogram (m).
+        #[serde(deserialize_with = "three")]
         origin: [f64; 3],
         /// First edge (m).
+        #[serde(deserialize_with = "three")]
         edge_a: [f64; 3],
         /// Second edge (m).
+        #[serde(deserialize_with = "three")]
         edge_b: [f64; 3],
         /// Sphere radius (m).
         radius: f64,
@@ -339,8 +345,10 @@ fn fixed() -> MotionSpec {
 #[serde(deny_unknown_fields)]
 pub struct WallSpec {
     /// A point on the plane (m).
+    #[serde(deserialize_with = "three")]
     pub point: [f64; 3],
     /// Normal pointing towards the particles (normalised on use).
+    #[serde(deserialize_with = "three")]
     pub normal: [f64; 3],
     /// Species of the wall material.
     pub species: String,
@@ -434,4 +442,29 @@ pub struct NeighborSpec {
     /// Verlet skin (m); default 0.2 × the smallest particle diameter.
     #[serde(default)]
     pub skin: Option<f64>,
+}
+
+/// Deserialises exactly three components: serde's fixed-size arrays stop reading after the
+/// third and would silently drop a fourth (`size = [0.02, 0.02, 0.02, 0.02]`).
+fn three<'de, D, T>(d: D) -> Result<[T; 3], D::Error>
+where
+    D: serde::Deserializer<'de>,
+    T: Deserialize<'de>,
+{
+    let v = Vec::<T>::deserialize(d)?;
+    let n = v.len();
+    v.try_into()
+        .map_err(|_| serde::de::Error::invalid_length(n, &"exactly 3 components"))
+}
+
+/// [`three`] for an optional value.
+fn three_opt<'de, D, T>(d: D) -> Result<Option<[T; 3]>, D::Error>
+where
+    D: serde::Deserializer<'de>,
+    T: Deserialize<'de>,
+{
+    #[derive(Deserialize)]
+    #[serde(bound = "T: Deserialize<'de>")]
+    struct Three<T>(#[serde(deserialize_with = "three")] [T; 3]);
+    Ok(Option::<Three<T>>::deserialize(d)?.map(|t| t.0))
 }
