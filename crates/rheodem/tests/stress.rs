@@ -436,7 +436,7 @@ fn walls_share_of_the_stress() {
     // A second fixed particle W2 overlapping R by 0.1 mm, out of S2's reach.
     let a_w2 = 0.7e-3;
     let r_w2 = r_r + DVec3::X * (a_r + a_w2 - 1.0e-4);
-    // The lid's plane: S2's centre 0.98 a2 away along −lid_n... i.e. gap 0.98 a2.
+    // The tilted lid: S2's centre at a gap of 0.98 a2 from its plane.
     let lid_point = r2 - lid_n * (0.98 * a2);
     let center = DVec3::new(6.0e-3, 2.0e-3, 5.0e-3);
     let axis = DVec3::new(0.3, 0.4, 1.0).normalize();
