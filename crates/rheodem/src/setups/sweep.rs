@@ -7,14 +7,20 @@
 //! [base]                      # fields shared by every point (any ShearBoxSpec field)
 //! particles = 4096
 //! polydispersity = 3.0
+//! inertial = 0.02
+//! softness = 0.01
+//! cohesion = "reversible"
 //! [grid]                      # optional: every combination of the listed values
 //! mu_p = [0.01, 0.5]
 //! bond = [0.5, 1.0]
 //! [[point]]                   # optional: individual points (base ⊕ point)
 //! mu_p = 0.01
-//! inertial = 0.02
-//! softness = 0.01
+//! inertial = 0.05
+//! bond = 0.0
 //! ```
+//!
+//! Every point, after merging, must be a complete [`ShearBoxSpec`]: here the grid's four
+//! points take `inertial`, `softness` and `cohesion` from `[base]`.
 
 use super::shear_box::{ShearBoxSpec, SteadyState, steady_state};
 use crate::io::atomic::write_atomic;
