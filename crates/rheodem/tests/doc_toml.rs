@@ -43,10 +43,9 @@ fn doc_lines(source: &str) -> Vec<(usize, String)> {
         .enumerate()
         .filter_map(|(n, line)| {
             let t = line.trim_start();
-            let rest = t.strip_prefix("//!").or_else(|| {
-                t.strip_prefix("///")
-                    .filter(|r| !r.starts_with('/'))
-            })?;
+            let rest = t
+                .strip_prefix("//!")
+                .or_else(|| t.strip_prefix("///").filter(|r| !r.starts_with('/')))?;
             Some((n + 1, rest.strip_prefix(' ').unwrap_or(rest).to_string()))
         })
         .collect()
@@ -229,11 +228,8 @@ fn every_toml_example_in_the_docs_is_valid() {
         }
     }
     assert!(failures.is_empty(), "{}", failures.join("\n"));
-    let found = |file: &str, kind: &str| {
-        kinds
-            .iter()
-            .any(|(at, k)| at.contains(file) && *k == kind)
-    };
+    let found =
+        |file: &str, kind: &str| kinds.iter().any(|(at, k)| at.contains(file) && *k == kind);
     assert!(found("scenario/spec.rs", "scenario"), "{kinds:?}");
     assert!(found("setups/sweep.rs", "sweep"), "{kinds:?}");
 }
@@ -247,11 +243,16 @@ fn toml_blocks_are_extracted_from_doc_comments() {
     let blocks = toml_blocks(&doc_lines(src));
     assert_eq!(
         blocks,
-        vec![(2, "seed = 3\n".to_string()), (9, "[run]\nsteps = 2\n".to_string())]
+        vec![
+            (2, "seed = 3\n".to_string()),
+            (9, "[run]\nsteps = 2\n".to_string())
+        ]
     );
     assert_eq!(check_block("seed = 3\n"), Ok("scenario fragment"));
     assert_eq!(
-        check_block("[[wall]]\npoint = [0.0, 0.0, 0.0]\nnormal = [0.0, 0.0, 1.0]\nspecies = \"glass\"\n"),
+        check_block(
+            "[[wall]]\npoint = [0.0, 0.0, 0.0]\nnormal = [0.0, 0.0, 1.0]\nspecies = \"glass\"\n"
+        ),
         Ok("scenario fragment")
     );
     assert!(check_block("[domain]\nsize = [0.01, 0.01]\n").is_err());

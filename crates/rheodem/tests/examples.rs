@@ -101,8 +101,8 @@ fn every_example_runs_a_few_steps() {
             std::process::id()
         ));
         let base = path.parent().expect("examples/");
-        let mut run = Run::start(scenario, base, &dir, 1, true)
-            .unwrap_or_else(|e| panic!("{name}: {e}"));
+        let mut run =
+            Run::start(scenario, base, &dir, 1, true).unwrap_or_else(|e| panic!("{name}: {e}"));
         run.advance(&dir, |_, _| {})
             .unwrap_or_else(|e| panic!("{name}: {e}"));
         let sim = &run.simulation;
@@ -122,7 +122,10 @@ fn every_example_runs_a_few_steps() {
         for o in &run.rows {
             assert!(o.is_finite(), "{name}: {o:?}");
             assert!(o.kinetic_translational >= 0.0 && o.kinetic_rotational >= 0.0);
-            assert!(o.volume_fraction > 0.0 && o.volume_fraction <= 0.74, "{name}: {o:?}");
+            assert!(
+                o.volume_fraction > 0.0 && o.volume_fraction <= 0.74,
+                "{name}: {o:?}"
+            );
             assert!((o.coordination - 2.0 * o.contacts as f64 / free as f64).abs() < 1e-12);
         }
         let last = run.rows.last().expect("rows");
@@ -147,7 +150,10 @@ fn every_example_runs_a_few_steps() {
         if pressure_target.is_some() {
             assert!(last.mean_stress() > 0.0, "{name}: {last:?}");
             let report = run.resolved.preparation.as_ref().expect("prepared");
-            assert!(report.compression_steps > 0 && report.mean_stress > 0.0, "{name}");
+            assert!(
+                report.compression_steps > 0 && report.mean_stress > 0.0,
+                "{name}"
+            );
         }
         if let Some(derived) = shear_rate {
             let le = sim.domain.lees_edwards.expect("sheared box");
@@ -155,13 +161,24 @@ fn every_example_runs_a_few_steps() {
             assert!(last.stress[1][1] > 0.0, "{name}: {last:?}");
             assert!(sim.stress_control.is_some(), "{name}");
         }
-        for f in ["scenario.toml", "resolved.json", "timeseries.csv", "summary.json"] {
+        for f in [
+            "scenario.toml",
+            "resolved.json",
+            "timeseries.csv",
+            "summary.json",
+        ] {
             assert!(dir.join(f).exists(), "{name}: no {f}");
         }
         let _ = std::fs::remove_dir_all(&dir);
         let seconds = start.elapsed().as_secs_f64();
-        eprintln!("{name}: {STEPS} steps of {} particles in {seconds:.2} s", p.len());
+        eprintln!(
+            "{name}: {STEPS} steps of {} particles in {seconds:.2} s",
+            p.len()
+        );
         assert!(seconds < 10.0, "{name} took {seconds:.1} s");
     }
-    assert!(kinds.0 >= 1 && kinds.1 >= 1, "scenarios and shear-box points");
+    assert!(
+        kinds.0 >= 1 && kinds.1 >= 1,
+        "scenarios and shear-box points"
+    );
 }

@@ -275,10 +275,30 @@ fn three_vectors_need_exactly_three_components() {
         "[[particles]]\nkind = \"explicit\"\nspecies = \"glass\"\nspheres = [{ radius = 1e-3, position = [0.01, 0.01, 0.01] }]\n[run]",
     );
     let cases = [
-        ("size", "size = [0.02, 0.02, 0.02]", "[0.02, 0.02]", "[0.02, 0.02, 0.02, 0.02]"),
-        ("periodic", "periodic = [true, true, true]", "[true, true]", "[true, true, true, true]"),
-        ("gravity", "seed = 3", "[0.0, -9.81]", "[0.0, 0.0, -9.81, 0.0]"),
-        ("position", "position = [0.01, 0.01, 0.01]", "[0.01, 0.01]", "[0.01, 0.01, 0.01, 0.01]"),
+        (
+            "size",
+            "size = [0.02, 0.02, 0.02]",
+            "[0.02, 0.02]",
+            "[0.02, 0.02, 0.02, 0.02]",
+        ),
+        (
+            "periodic",
+            "periodic = [true, true, true]",
+            "[true, true]",
+            "[true, true, true, true]",
+        ),
+        (
+            "gravity",
+            "seed = 3",
+            "[0.0, -9.81]",
+            "[0.0, 0.0, -9.81, 0.0]",
+        ),
+        (
+            "position",
+            "position = [0.01, 0.01, 0.01]",
+            "[0.01, 0.01]",
+            "[0.01, 0.01, 0.01, 0.01]",
+        ),
     ];
     for (key, from, few, many) in cases {
         for value in [few, many] {
@@ -291,7 +311,11 @@ fn three_vectors_need_exactly_three_components() {
             assert_ne!(text, with_sphere);
             let err = error_of(&text);
             // Inside a tagged particle group the path stops at the group.
-            let needle = if key == "position" { "particles[1]" } else { key };
+            let needle = if key == "position" {
+                "particles[1]"
+            } else {
+                key
+            };
             assert!(err.contains(needle), "{key} = {value}: {err}");
         }
     }

@@ -286,13 +286,7 @@ fn full_tensor_of_a_hand_built_periodic_configuration() {
             a_e,
             free,
         ),
-        sphere(
-            r_f,
-            DVec3::new(0.2, 0.3, -0.1),
-            DVec3::ZERO,
-            a_f,
-            free,
-        ),
+        sphere(r_f, DVec3::new(0.2, 0.3, -0.1), DVec3::ZERO, a_f, free),
         sphere(
             r_g,
             DVec3::new(-0.2, 0.3, 0.15),
@@ -396,7 +390,10 @@ fn full_tensor_of_a_hand_built_periodic_configuration() {
     );
     let d = rel_diff(&rows(sums.stress_sum / volume), &contact);
     assert!(d < 1e-12, "contact part ({d:e})");
-    assert_eq!((sums.contacts, sums.sliding, sums.attracting_apart), (2, 1, 1));
+    assert_eq!(
+        (sums.contacts, sums.sliding, sums.attracting_apart),
+        (2, 1, 1)
+    );
 }
 
 /// Walls' share of the stress, by the documented convention (`ContactSums::stress_sum`,

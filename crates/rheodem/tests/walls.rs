@@ -156,7 +156,10 @@ fn settled_column_is_carried_by_the_floor() {
     let volume = sim.domain.volume();
     let kinetic = rheodem::measure::kinetic_stress_sum(p, &sim.domain);
     let virial = o.stress[2][2] * volume - kinetic.z_axis.z;
-    let moment: f64 = g * (0..p.len()).map(|i| p.mass[i] * p.position[i].z).sum::<f64>();
+    let moment: f64 = g
+        * (0..p.len())
+            .map(|i| p.mass[i] * p.position[i].z)
+            .sum::<f64>();
     assert!(
         (virial / moment - 1.0).abs() < 0.01,
         "V σ_zz = {virial} vs g Σ m z = {moment}"
@@ -291,7 +294,10 @@ fn lattice_groups_have_the_documented_geometry() {
                 }
                 // Parallelogram coordinates (the edges are orthogonal): s, t ∈ [0, 1].
                 let rel = p.position[i] - origin;
-                let (s, t) = (rel.dot(ea) / ea.length_squared(), rel.dot(eb) / eb.length_squared());
+                let (s, t) = (
+                    rel.dot(ea) / ea.length_squared(),
+                    rel.dot(eb) / eb.length_squared(),
+                );
                 assert!((-1e-12..=1.0 + 1e-12).contains(&s) && (-1e-12..=1.0 + 1e-12).contains(&t));
                 assert!(rel.dot(ea.cross(eb)).abs() < 1e-12 * 0.02 * ea.cross(eb).length());
                 if u + 1 < na {
@@ -517,7 +523,10 @@ fn rotating_wall_follows_its_rigid_rotation_while_touched() {
         }
         touched += usize::from(sim.observables().contacts > 0);
     }
-    assert!(touched >= 5, "the free sphere touched the wall for {touched} steps");
+    assert!(
+        touched >= 5,
+        "the free sphere touched the wall for {touched} steps"
+    );
     let f = slot(&sim, 6);
     assert!(sim.particles.motion[f].is_free());
     let speed = sim.particles.velocity[f].length();
