@@ -59,10 +59,10 @@ fn toml_blocks(lines: &[(usize, String)]) -> Vec<(usize, String)> {
         let t = line.trim();
         match &mut current {
             None => {
-                if let Some(info) = t.strip_prefix("```") {
-                    if info.split(',').any(|w| w.trim() == "toml") {
-                        current = Some((*n, String::new()));
-                    }
+                if let Some(info) = t.strip_prefix("```")
+                    && info.split(',').any(|w| w.trim() == "toml")
+                {
+                    current = Some((*n, String::new()));
                 }
             }
             Some((_, text)) => {

@@ -19,7 +19,7 @@ fn examples_dir() -> PathBuf {
 
 /// What an example file is.
 enum Example {
-    Scenario(Scenario),
+    Scenario(Box<Scenario>),
     ShearBox(ShearBoxSpec),
 }
 
@@ -28,7 +28,7 @@ enum Example {
 fn parse(path: &Path) -> Example {
     let text = std::fs::read_to_string(path).expect("readable example");
     match Scenario::from_toml(&text) {
-        Ok(s) => Example::Scenario(s),
+        Ok(s) => Example::Scenario(Box::new(s)),
         Err(as_scenario) => match toml::from_str::<ShearBoxSpec>(&text) {
             Ok(p) => Example::ShearBox(p),
             Err(as_point) => panic!(
@@ -85,7 +85,7 @@ fn every_example_runs_a_few_steps() {
         let (scenario, shear_rate) = match parse(path) {
             Example::Scenario(s) => {
                 kinds.0 += 1;
-                (s, None)
+                (*s, None)
             }
             Example::ShearBox(point) => {
                 kinds.1 += 1;
