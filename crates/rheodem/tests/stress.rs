@@ -30,7 +30,7 @@ const RHO: f64 = 2000.0;
 /// Normal stiffness (N/m) and restitution coefficient.
 const KN: f64 = 100.0;
 const E: f64 = 0.7;
-/// `k_t = γ_t-ratio · …`: the paper's `2/7` for both the spring and the dashpot.
+/// `k_t / k_n = γ_t / γ_n`: the paper's `2/7`.
 const RATIO_T: f64 = 2.0 / 7.0;
 /// Coulomb coefficient (static = dynamic).
 const MU: f64 = 0.4;
