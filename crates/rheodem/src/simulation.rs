@@ -56,6 +56,58 @@ pub struct Simulation {
 impl Simulation {
     /// Assembles a simulation and evaluates the initial forces. `skin` (m) is the Verlet
     /// skin; the list also keeps every pair within the laws' interaction range.
+    ///
+    /// Two spheres overlapping by `δ` at rest push each other apart with `k_n δ`, and the
+    /// contact stress `σ = f ⊗ l / V` is `k_n δ (a_i + a_j − δ) / V` along the line of
+    /// centres (compression positive):
+    ///
+    /// ```
+    /// use glam::DVec3;
+    /// use rheodem::Simulation;
+    /// use rheodem::contact::{Adhesion, ContactLaw, ContactTable, Damping, NormalLaw, Resistance};
+    /// use rheodem::domain::Domain;
+    /// use rheodem::particles::{Motion, Particles, Sphere};
+    ///
+    /// let (a, delta, k_n) = (1.0e-3, 1.0e-5, 100.0);
+    /// let law = ContactLaw {
+    ///     normal: NormalLaw { stiffness: k_n, damping: Damping::from_restitution(0.8, k_n) },
+    ///     tangential: Resistance::NONE,
+    ///     rolling: Resistance::NONE,
+    ///     torsion: Resistance::NONE,
+    ///     adhesion: Adhesion::None,
+    /// };
+    /// let mut particles = Particles::default();
+    /// for x in [0.0, 2.0 * a - delta] {
+    ///     let sphere = Sphere {
+    ///         position: DVec3::new(0.01 + x, 0.01, 0.01),
+    ///         velocity: DVec3::ZERO,
+    ///         angular_velocity: DVec3::ZERO,
+    ///         radius: a,
+    ///         species: 0,
+    ///         motion: Motion::Free,
+    ///     };
+    ///     particles.push(sphere, 2000.0);
+    /// }
+    /// let domain = Domain::new(DVec3::ZERO, DVec3::splat(0.02), [false; 3]);
+    /// let sim = Simulation::new(
+    ///     particles,
+    ///     domain,
+    ///     ContactTable::uniform(1, law),
+    ///     Vec::new(),
+    ///     DVec3::ZERO,
+    ///     1e-5,
+    ///     0.2 * a,
+    /// )?;
+    /// let slots = sim.particles.slot_of();
+    /// let f_left = sim.particles.force[slots[0] as usize];
+    /// assert!((f_left - DVec3::new(-k_n * delta, 0.0, 0.0)).length() < 1e-12 * k_n * delta);
+    /// let o = sim.observables();
+    /// assert_eq!(o.contacts, 1);
+    /// let sigma_xx = k_n * delta * (2.0 * a - delta) / 0.02f64.powi(3);
+    /// assert!((o.stress[0][0] / sigma_xx - 1.0).abs() < 1e-12);
+    /// assert_eq!(o.stress[1][1], 0.0);
+    /// # Ok::<(), rheodem::neighbor::NeighborError>(())
+    /// ```
     #[allow(clippy::too_many_arguments)]
     pub fn new(
         particles: Particles,

@@ -17,6 +17,31 @@ use serde::{Deserialize, Serialize};
 use std::f64::consts::PI;
 
 /// An adhesive law.
+///
+/// A Willett bridge pulls with `f_max = 2π r γ_s cos θ` in contact (`r` the harmonic-mean
+/// radius), with `f_max / (1 + 1.05 S̄ + 2.5 S̄²)` at separation `S` (`S̄ = S sqrt(r/V_b)`),
+/// and ruptures past `S_c = (1 + θ/2) V_b^{1/3}`; it forms only at contact:
+///
+/// ```
+/// use rheodem::contact::Adhesion;
+/// use std::f64::consts::PI;
+///
+/// let (gamma, theta, volume) = (0.02, 20f64.to_radians(), 75e-12);
+/// let bridge = Adhesion::LiquidBridge { surface_tension: gamma, contact_angle: theta, volume };
+/// let (a_i, a_j) = (1.1e-3, 0.6e-3);
+/// let r = 2.0 * a_i * a_j / (a_i + a_j);
+/// let f_max = 2.0 * PI * r * gamma * theta.cos();
+/// assert!((bridge.contact_force(a_i, a_j) + f_max).abs() < 1e-15);
+/// let s_c = (1.0 + theta / 2.0) * volume.cbrt();
+/// assert!((bridge.range() - s_c).abs() < 1e-15);
+/// let s = 0.5 * s_c;
+/// let s_bar = s * (r / volume).sqrt();
+/// let (f, alive) = bridge.separated_force(s, a_i, a_j, true);
+/// assert!(alive && (f + f_max / (1.0 + 1.05 * s_bar + 2.5 * s_bar * s_bar)).abs() < 1e-15);
+/// // No bridge on approach, none past rupture.
+/// assert_eq!(bridge.separated_force(s, a_i, a_j, false), (0.0, false));
+/// assert_eq!(bridge.separated_force(1.01 * s_c, a_i, a_j, true), (0.0, false));
+/// ```
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub enum Adhesion {
     /// No adhesion.

@@ -113,6 +113,42 @@ impl ContactLaw {
     /// Evaluates a pair at any overlap and advances its history over `dt` (s). Returns
     /// `None` when the pair does not interact; its history is then reset (an irreversible
     /// bridge past its rupture distance is gone).
+    ///
+    /// A frictionless pair with reversible adhesion (`f_max = 1 mN`, `k_c = 10 N/m`, range
+    /// `δ_a = 0.1 mm`) pushes with `k_n δ − f_max` in contact, pulls with `k_c S − f_max` at
+    /// a separation `S < δ_a`, and no longer interacts beyond:
+    ///
+    /// ```
+    /// use glam::DVec3;
+    /// use rheodem::contact::{
+    ///     Adhesion, ContactHistory, ContactLaw, Damping, NormalLaw, PairKinematics, Resistance,
+    /// };
+    ///
+    /// let law = ContactLaw {
+    ///     normal: NormalLaw { stiffness: 100.0, damping: Damping::NONE },
+    ///     tangential: Resistance::NONE,
+    ///     rolling: Resistance::NONE,
+    ///     torsion: Resistance::NONE,
+    ///     adhesion: Adhesion::Reversible { max_force: 1.0e-3, stiffness: 10.0 },
+    /// };
+    /// assert_eq!(law.range(), 1.0e-4);
+    /// let at = |overlap: f64| PairKinematics {
+    ///     normal: DVec3::X, // from j to i
+    ///     overlap,
+    ///     radius_i: 1.0e-3,
+    ///     radius_j: 1.0e-3,
+    ///     velocity: DVec3::ZERO,
+    ///     omega_i: DVec3::ZERO,
+    ///     omega_j: DVec3::ZERO,
+    ///     reduced_mass: 4.0e-6,
+    /// };
+    /// let mut h = ContactHistory::default();
+    /// let touching = law.interact(&at(2.0e-5), &mut h, 1e-5).expect("in contact");
+    /// assert!((touching.force.x - (100.0 * 2.0e-5 - 1.0e-3)).abs() < 1e-15);
+    /// let apart = law.interact(&at(-4.0e-5), &mut h, 1e-5).expect("within range");
+    /// assert!((apart.force.x - (10.0 * 4.0e-5 - 1.0e-3)).abs() < 1e-15);
+    /// assert!(law.interact(&at(-2.0e-4), &mut h, 1e-5).is_none());
+    /// ```
     #[inline(always)]
     pub fn interact(
         &self,

@@ -53,6 +53,40 @@ pub fn invalid(
 impl Scenario {
     /// Parses a scenario from TOML text (no validation beyond the format).
     /// Errors name the key path (e.g. `particles[0].count`) and the line.
+    ///
+    /// Omitted keys take their defaults; an unknown key is an error that names it, and
+    /// [`build`] then reports values outside their range:
+    ///
+    /// ```
+    /// use rheodem::scenario::{Scenario, build};
+    ///
+    /// let text = r#"
+    ///     [domain]
+    ///     size = [0.01, 0.01, 0.01]
+    ///     periodic = [true, true, true]
+    ///     [[species]]
+    ///     name = "glass"
+    ///     density = 2000.0
+    ///     [[contact]]
+    ///     normal = { stiffness = 100.0, restitution = 0.8 }
+    ///     [[particles]]
+    ///     kind = "random"
+    ///     species = "glass"
+    ///     count = 20
+    ///     mean_diameter = 1.0e-3
+    ///     [run]
+    ///     steps = 10
+    /// "#;
+    /// let s = Scenario::from_toml(text)?;
+    /// assert_eq!(s.seed, 1); // the default
+    /// assert_eq!(s.output.timeseries_rows, 200);
+    /// let typo = Scenario::from_toml(&text.replace("density", "densty")).unwrap_err();
+    /// assert!(typo.to_string().contains("densty"), "{typo}");
+    /// let negative = Scenario::from_toml(&text.replace("2000.0", "-1.0"))?;
+    /// let err = build(&negative, std::path::Path::new(".")).err().expect("invalid");
+    /// assert_eq!(err.to_string(), "`species[0].density` = -1: must be a positive finite number");
+    /// # Ok::<(), rheodem::scenario::ScenarioError>(())
+    /// ```
     pub fn from_toml(text: &str) -> Result<Scenario, ScenarioError> {
         let de = toml::Deserializer::parse(text)
             .map_err(|e| ScenarioError::Parse(format!("scenario: {e}")))?;

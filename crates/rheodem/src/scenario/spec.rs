@@ -14,7 +14,7 @@
 //! [[particles]]
 //! kind = "random"
 //! species = "glass"
-//! count = 500
+//! count = 400
 //! mean_diameter = 2.2e-3
 //! polydispersity = 2.0
 //! [preparation]

@@ -200,6 +200,27 @@ impl ShearBoxSpec {
     }
 
     /// Validates the controls and derives the SI values.
+    ///
+    /// `p = p* k_n / d_p`, `γ̇ = I sqrt(p / ρ_p) / d_p`, `f_a^max = Bo p d_p²`:
+    ///
+    /// ```
+    /// use rheodem::setups::shear_box::ShearBoxSpec;
+    ///
+    /// let spec: ShearBoxSpec = toml::from_str(
+    ///     "mu_p = 0.5\ninertial = 0.02\nsoftness = 0.01\nbond = 1.0\ncohesion = \"reversible\"",
+    /// )?;
+    /// let dv = spec.derive()?;
+    /// let (d, rho, k_n) = (2.2e-3, 2000.0, 100.0); // the seeds' material, the defaults
+    /// let p = 0.01 * k_n / d;
+    /// assert!((dv.pressure / p - 1.0).abs() < 1e-14);
+    /// assert!((dv.shear_rate / (0.02 * (p / rho).sqrt() / d) - 1.0).abs() < 1e-14);
+    /// assert!((dv.max_force / (1.0 * p * d * d) - 1.0).abs() < 1e-14);
+    /// assert!((dv.duration * dv.shear_rate / spec.strain - 1.0).abs() < 1e-14);
+    /// // Out-of-range controls are refused with the key.
+    /// let bad = ShearBoxSpec { inertial: 3.0, ..spec };
+    /// assert!(bad.derive().unwrap_err().to_string().contains("inertial"));
+    /// # Ok::<(), Box<dyn std::error::Error>>(())
+    /// ```
     pub fn derive(&self) -> Result<Derived, ScenarioError> {
         in_range("mu_p", self.mu_p, 0.0, 10.0, false)?;
         let i = in_range("inertial", self.inertial, 0.0, 2.0, true)?;

@@ -9,14 +9,20 @@
 //! [base]                      # fields shared by every point (any ShearBoxSpec field)
 //! particles = 4096
 //! polydispersity = 3.0
+//! inertial = 0.02
+//! softness = 0.01
+//! cohesion = "reversible"
 //! [grid]                      # optional: every combination of the listed values
 //! mu_p = [0.01, 0.5]
 //! bond = [0.5, 1.0]
 //! [[point]]                   # optional: individual points (base ⊕ point)
 //! mu_p = 0.01
-//! inertial = 0.02
-//! softness = 0.01
+//! inertial = 0.05
+//! bond = 0.0
 //! ```
+//!
+//! Every point, after merging, must be a complete [`ShearBoxSpec`]: here the grid's four
+//! points take `inertial`, `softness` and `cohesion` from `[base]`.
 
 use super::shear_box::{ShearBoxSpec, SteadyState, steady_state};
 use crate::io::atomic::write_atomic;
@@ -143,6 +149,34 @@ pub const POINT_FILE: &str = "point.json";
 
 /// Runs (or resumes, or skips when finished) one point in `dir` with the current rayon
 /// pool, writing `steady_state.json` at the end.
+///
+/// The smallest sensible point: 80 nearly monodisperse spheres (`w = 1.2`, close to the
+/// fewest the box allows), sheared at `I = 0.1` over one strain unit, the first half
+/// discarded (about a second). It gives a dense, compressed packing with a macroscopic
+/// friction between 0.1 and 1; half a strain unit is too short a window to be steady,
+/// and the result says so. A second call finds the point finished:
+///
+/// ```
+/// use rheodem::setups::shear_box::ShearBoxSpec;
+/// use rheodem::setups::sweep::run_point;
+///
+/// let spec: ShearBoxSpec = toml::from_str(
+///     "mu_p = 0.5\ninertial = 0.1\nsoftness = 0.01\npolydispersity = 1.2\n\
+///      particles = 80\nstrain = 1.0\ntransient_strain = 0.5\ncheckpoints = 1\nsnapshots = 0",
+/// )?;
+/// let dir = std::env::temp_dir().join(format!("rheodem-doc-point-{}", std::process::id()));
+/// let result = run_point("doc", &spec, &dir, 1, &mut |_, _| {})?;
+/// let ss = result.steady_state.expect("rows past the transient");
+/// assert!(ss.volume_fraction.mean > 0.5 && ss.volume_fraction.mean < 0.7);
+/// assert!(ss.sigma_yy.mean > 0.0);
+/// assert!(ss.friction.mean > 0.1 && ss.friction.mean < 1.0);
+/// assert_eq!(ss.strain_window[1].round(), 1.0);
+/// assert!(!ss.steady && ss.note.contains("strain units past the transient"), "{}", ss.note);
+/// let again = run_point("doc", &spec, &dir, 1, &mut |_, _| panic!("finished already"))?;
+/// assert_eq!(again.spec, spec);
+/// std::fs::remove_dir_all(&dir)?;
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
 pub fn run_point(
     name: &str,
     spec: &ShearBoxSpec,
