@@ -18,7 +18,7 @@
 
 use crate::contact::ContactHistory;
 use crate::domain::{Domain, IDENTITY_IMAGE, image_code};
-use crate::particles::Particles;
+use crate::particles::{Motion, Particles};
 use glam::{DMat3, DVec3};
 use rayon::prelude::*;
 use rustc_hash::FxHashMap;
@@ -158,12 +158,19 @@ impl NeighborList {
     ) -> Result<(), NeighborError> {
         let old = self.history_by_id(particles);
 
-        for (r, v) in particles
+        for ((r, v), motion) in particles
             .position
             .iter_mut()
             .zip(particles.velocity.iter_mut())
+            .zip(particles.motion.iter_mut())
         {
+            let before = *r;
             domain.wrap(r, v);
+            // A rotating wall particle moved to its periodic image rotates about the
+            // image of its axis.
+            if let Motion::Rotating { center, .. } = motion {
+                *center += *r - before;
+            }
         }
 
         let a_max = particles.radius.iter().copied().fold(0.0, f64::max);

@@ -79,11 +79,12 @@ fn toml_blocks(lines: &[(usize, String)]) -> Vec<(usize, String)> {
     blocks
 }
 
-/// A minimal valid scenario, the base of fragments.
+/// A minimal valid scenario, the base of fragments (`z` closed, so that a fragment may add a
+/// floor).
 const MINIMAL: &str = r#"
 [domain]
 size = [0.01, 0.01, 0.01]
-periodic = [true, true, true]
+periodic = [true, true, false]
 [[species]]
 name = "glass"
 density = 2000.0

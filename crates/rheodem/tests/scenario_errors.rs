@@ -268,7 +268,6 @@ fn malformed_scenarios_name_the_key_and_range() {
 /// array is used up), so a typo such as `size = [0.02, 0.02, 0.02, 0.02]` goes unnoticed —
 /// contrary to the format's promise that every invalid value is reported.
 #[test]
-#[ignore = "bug: Scenario::from_toml accepts 3-vectors with more than 3 entries and drops the extra ones"]
 fn three_vectors_need_exactly_three_components() {
     let with_sphere = VALID.replace(
         "[run]",

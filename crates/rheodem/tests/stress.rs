@@ -602,8 +602,8 @@ fn walls_share_of_the_stress() {
     );
     let d = rel_diff(&rows(sums.stress_sum / volume), &particle_walls);
     assert!(d < 1e-12, "particle-wall part ({d:e})");
-    for mut w in walls {
-        sums.add(&w.apply(&mut particles, &ContactTable::uniform(1, law), DT));
+    for (k, mut w) in walls.into_iter().enumerate() {
+        sums.add(&w.apply(k as u32, &mut particles, &ContactTable::uniform(1, law), DT));
     }
     let d = rel_diff(&rows(sums.stress_sum / volume), &contact);
     assert!(d < 1e-12, "contact part ({d:e})");

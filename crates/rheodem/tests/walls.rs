@@ -31,7 +31,7 @@ fn wall_force(sim: &Simulation, k: usize) -> DVec3 {
         .for_each(|f| *f = DVec3::ZERO);
     let dt = copy.dt;
     let laws = copy.laws.clone();
-    copy.walls[k].apply(&mut copy.particles, &laws, dt);
+    copy.walls[k].apply(k as u32, &mut copy.particles, &laws, dt);
     copy.particles.force.iter().copied().sum()
 }
 
@@ -542,13 +542,12 @@ fn rotating_wall_follows_its_rigid_rotation_while_touched() {
 /// beyond `x = 20 mm`. Through the periodic boundaries it must be at `c + R(Ω t)(r₀ − c)`
 /// up to whole box lengths (checked to `10⁻¹¹` of the radius after every step, as above).
 ///
-/// It is not: the neighbour list wraps every particle into the box, prescribed ones
-/// included (`NeighborList::build` → `Domain::wrap`), and `drift` then rotates the wrapped
-/// position about `c`: from the first rebuild after it crosses `x = 20 mm` the sphere runs
-/// on the circle about `c` through its wrapped position (radius ~19 mm instead of 3 mm),
-/// which is no periodic image of the prescribed one. Fails at step 5161 (of 11 600).
+/// Regression: the neighbour list wraps every particle into the box, prescribed ones
+/// included, and `drift` used to rotate the wrapped position about the unwrapped `c`, so
+/// from the first rebuild after the crossing the sphere ran on a circle of ~19 mm instead
+/// of 3 mm (it failed at step 5161 of 11 600). The wrap now moves the axis with the
+/// particle.
 #[test]
-#[ignore = "bug: a rotating wall particle wrapped across a periodic boundary rotates about the unwrapped centre (drift after Domain::wrap)"]
 fn rotating_wall_across_a_periodic_boundary() {
     let center = DVec3::new(19.0e-3, 10.0e-3, 10.0e-3);
     let r0 = center - DVec3::new(3.0e-3, 0.0, 0.0);
