@@ -19,7 +19,7 @@ use rheodem::Simulation;
 use rheodem::contact::{Adhesion, ContactLaw, ContactTable, Damping, NormalLaw, Resistance};
 use rheodem::domain::Domain;
 use rheodem::forces::{ForceScratch, MEASURE_ALL, pair_forces};
-use rheodem::measure::kinetic_stress_sum;
+use rheodem::measure::{ContactSums, kinetic_stress_sum};
 use rheodem::neighbor::NeighborList;
 use rheodem::particles::{Motion, Particles, Sphere};
 use rheodem::walls::PlaneWall;
@@ -190,6 +190,27 @@ fn rel_diff(got: &[[f64; 3]; 3], want: &[[f64; 3]; 3]) -> f64 {
         .zip(want.iter().flatten())
         .fold(0.0f64, |m, (g, w)| m.max((g - w).abs()));
     diff / scale
+}
+
+/// The contact sums of one measuring force evaluation over a fresh neighbour list (skin
+/// 0.2 mm, interaction `range` in m).
+fn measured_pairs(
+    particles: &mut Particles,
+    domain: &Domain,
+    law: ContactLaw,
+    range: f64,
+) -> ContactSums {
+    let mut list = NeighborList::new(0.2e-3, range);
+    list.build(particles, domain).expect("list");
+    pair_forces::<MEASURE_ALL>(
+        particles,
+        &mut list,
+        &ContactTable::uniform(1, law),
+        &domain.image_transforms(),
+        0.0,
+        DT,
+        &mut ForceScratch::default(),
+    )
 }
 
 fn sphere(r: DVec3, v: DVec3, w: DVec3, a: f64, motion: Motion) -> Sphere {
@@ -377,17 +398,7 @@ fn full_tensor_of_a_hand_built_periodic_configuration() {
     );
 
     // The contact part alone, from the pair loop's own sums.
-    let mut list = NeighborList::new(0.2e-3, law.range());
-    list.build(&mut particles, &domain).expect("list");
-    let sums = pair_forces::<MEASURE_ALL>(
-        &mut particles,
-        &mut list,
-        &ContactTable::uniform(1, law),
-        &domain.image_transforms(),
-        0.0,
-        DT,
-        &mut ForceScratch::default(),
-    );
+    let sums = measured_pairs(&mut particles, &domain, law, law.range());
     let d = rel_diff(&rows(sums.stress_sum / volume), &contact);
     assert!(d < 1e-12, "contact part ({d:e})");
     assert_eq!(
@@ -589,17 +600,7 @@ fn walls_share_of_the_stress() {
 
     // The contact part alone: the pair loop (particle walls) plus the planar walls' sums.
     let mut particles = sim.particles.clone();
-    let mut list = NeighborList::new(0.2e-3, 0.0);
-    list.build(&mut particles, &domain).expect("list");
-    let mut sums = pair_forces::<MEASURE_ALL>(
-        &mut particles,
-        &mut list,
-        &ContactTable::uniform(1, law),
-        &domain.image_transforms(),
-        0.0,
-        DT,
-        &mut ForceScratch::default(),
-    );
+    let mut sums = measured_pairs(&mut particles, &domain, law, 0.0);
     let d = rel_diff(&rows(sums.stress_sum / volume), &particle_walls);
     assert!(d < 1e-12, "particle-wall part ({d:e})");
     for (k, mut w) in walls.into_iter().enumerate() {
