@@ -68,10 +68,83 @@ impl ImageTransform {
     /// Image of an angular velocity (rad/s).
     #[inline]
     pub fn angular_velocity(&self, w: DVec3) -> DVec3 {
+        self.vector(w)
+    }
+
+    /// Image of a free vector (a force, a spring, an axis): `R u`.
+    #[inline]
+    pub fn vector(&self, u: DVec3) -> DVec3 {
         match self.rotation {
-            None => w,
-            Some(m) => m * w,
+            None => u,
+            Some(m) => m * u,
         }
+    }
+
+    /// A vector (force, torque, spring) of the image frame seen in the original particle's
+    /// frame: `Rᵀ u`.
+    #[inline]
+    pub fn vector_back(&self, u: DVec3) -> DVec3 {
+        match self.rotation {
+            None => u,
+            Some(m) => m.transpose() * u,
+        }
+    }
+
+    /// A position of the image frame mapped back to the original frame: `Rᵀ (r − shift)` (m).
+    #[inline]
+    pub fn position_back(&self, r: DVec3) -> DVec3 {
+        self.vector_back(r - self.shift)
+    }
+}
+
+/// An angular-periodic wedge `0 ≤ φ < Φ` about the `z` axis through the origin
+/// (docs/model.md §4.6): a particle leaving through one face re-enters through the other with
+/// its position, velocity and spin rotated by `∓Φ`, and pairs interact through the images
+/// rotated by `±Φ`.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Wedge {
+    /// Opening angle `Φ` (rad), in `(0, π]`.
+    pub angle: f64,
+    /// Smallest distance from the axis at which particles are expected (m); it bounds the
+    /// wedge's width for the neighbour search.
+    pub inner_radius: f64,
+    /// Largest distance from the axis at which particles are expected (m).
+    pub outer_radius: f64,
+}
+
+impl Wedge {
+    /// Rotation about `z` by `turns · Φ`.
+    pub fn rotation(&self, turns: i32) -> DMat3 {
+        DMat3::from_rotation_z(turns as f64 * self.angle)
+    }
+
+    /// Whether the images `+Φ` and `−Φ` are the same copy (`Φ = π`).
+    pub fn half_turn(&self) -> bool {
+        (self.angle - std::f64::consts::PI).abs() < 1e-12
+    }
+
+    /// Distance (m) from `q` (projected on `x`–`y`) to the wedge `0 ≤ φ ≤ Φ`: zero inside.
+    pub fn distance(&self, q: DVec3) -> f64 {
+        let p = DVec3::new(q.x, q.y, 0.0);
+        let phi = p.y.atan2(p.x);
+        let phi = if phi < 0.0 {
+            phi + std::f64::consts::TAU
+        } else {
+            phi
+        };
+        if phi <= self.angle {
+            return 0.0;
+        }
+        let to_ray = |theta: f64| {
+            let u = DVec3::new(theta.cos(), theta.sin(), 0.0);
+            let t = p.dot(u);
+            if t <= 0.0 {
+                p.length()
+            } else {
+                (p - u * t).length()
+            }
+        };
+        to_ray(0.0).min(to_ray(self.angle))
     }
 }
 
@@ -107,6 +180,10 @@ pub struct Domain {
     pub periodic: [bool; 3],
     /// Lees-Edwards shear in `x`–`y`, if any (needs `x` and `y` periodic).
     pub lees_edwards: Option<LeesEdwards>,
+    /// Angular-periodic wedge about `z`, if any (then no axis is periodic and `lo`, `hi`
+    /// bound the wedge's extent).
+    #[serde(default)]
+    pub wedge: Option<Wedge>,
     /// Accumulated deformation gradient of the box's affine motion (shear, rescaling) since
     /// the start; the neighbour list compares it between builds.
     pub deformation: DMat3,
@@ -120,8 +197,37 @@ impl Domain {
             hi,
             periodic,
             lees_edwards: None,
+            wedge: None,
             deformation: DMat3::IDENTITY,
         }
+    }
+
+    /// The wedge `0 ≤ φ < angle` (rad) about the `z` axis between the radii `inner` and
+    /// `outer` (m) and the heights `z_lo`, `z_hi` (m); `lo`, `hi` are set to its bounding box.
+    pub fn wedge(angle: f64, inner: f64, outer: f64, z_lo: f64, z_hi: f64) -> Domain {
+        let corner = |t: f64| DVec3::new(outer * t.cos(), outer * t.sin(), 0.0);
+        let mut lo = DVec3::new(0.0, 0.0, z_lo)
+            .min(corner(0.0))
+            .min(corner(angle));
+        let mut hi = DVec3::new(0.0, 0.0, z_hi)
+            .max(corner(0.0))
+            .max(corner(angle));
+        for k in 1..=2 {
+            let t = k as f64 * std::f64::consts::FRAC_PI_2;
+            if t <= angle {
+                lo = lo.min(corner(t));
+                hi = hi.max(corner(t));
+            }
+        }
+        lo.z = z_lo;
+        hi.z = z_hi;
+        let mut d = Domain::new(lo, hi, [false; 3]);
+        d.wedge = Some(Wedge {
+            angle,
+            inner_radius: inner,
+            outer_radius: outer,
+        });
+        d
     }
 
     /// Adds Lees-Edwards shear at rate `shear_rate` (1/s), shift zero.
@@ -183,15 +289,54 @@ impl Domain {
         self.hi - self.lo
     }
 
-    /// Box volume (m³).
+    /// Volume of the region (m³): the box, or the wedge's sector `½ Φ (R_o² − R_i²) L_z`.
     pub fn volume(&self) -> f64 {
         let l = self.lengths();
-        l.x * l.y * l.z
+        match &self.wedge {
+            Some(w) => 0.5 * w.angle * (w.outer_radius.powi(2) - w.inner_radius.powi(2)) * l.z,
+            None => l.x * l.y * l.z,
+        }
+    }
+
+    /// The image codes the neighbour search must try besides the translations of the
+    /// periodic axes, and for each the map of a query position: a pair `(i, j)` through
+    /// image `c` is within `d` when `|T_c⁻¹ r_i − r_j| < d`. Empty without a wedge; the
+    /// wedge's images rotate by `±Φ` (codes of offsets `(±1, 0, 0)`), one of them at `Φ = π`.
+    pub fn rotated_images(&self) -> Vec<(u8, DMat3)> {
+        match &self.wedge {
+            None => Vec::new(),
+            Some(w) if w.half_turn() => vec![(image_code([1, 0, 0]), w.rotation(-1))],
+            Some(w) => vec![
+                (image_code([1, 0, 0]), w.rotation(-1)),
+                (image_code([-1, 0, 0]), w.rotation(1)),
+            ],
+        }
+    }
+
+    /// The wedge turns (multiples of `Φ`) of an image code: its `x` offset under a wedge,
+    /// zero otherwise.
+    #[inline]
+    pub fn image_turns(&self, code: u8) -> i32 {
+        if self.wedge.is_some() {
+            image_offsets(code)[0]
+        } else {
+            0
+        }
     }
 
     /// The current transformation of every image code. Under Lees-Edwards shear the images
     /// across `y` are shifted by `c_y s` in `x` and move `c_y γ̇ L_y` faster in `x`.
+    /// A wedge's images are rotations by `c_x Φ` about `z`.
     pub fn image_transforms(&self) -> [ImageTransform; IMAGE_COUNT] {
+        if let Some(w) = &self.wedge {
+            return std::array::from_fn(|code| {
+                let turns = image_offsets(code as u8)[0];
+                ImageTransform {
+                    rotation: (turns != 0).then(|| w.rotation(turns)),
+                    ..ImageTransform::IDENTITY
+                }
+            });
+        }
         let l = self.lengths();
         let (s, u) = self
             .lees_edwards
@@ -207,9 +352,45 @@ impl Domain {
         })
     }
 
-    /// Maps a particle back into the primary box along its periodic axes. Crossing `y`
-    /// under Lees-Edwards shear also shifts `x` by `∓s` and `v_x` by `∓γ̇ L_y`.
-    pub fn wrap(&self, position: &mut DVec3, velocity: &mut DVec3) {
+    /// Maps a particle back into the primary region and returns the map applied
+    /// (`r' = R r + shift`). Along periodic axes the position is translated; crossing `y`
+    /// under Lees-Edwards shear also shifts `x` by `∓s` and `v_x` by `∓γ̇ L_y`; through a
+    /// wedge face position, velocity and spin are rotated by a multiple of `Φ`.
+    pub fn wrap(
+        &self,
+        position: &mut DVec3,
+        velocity: &mut DVec3,
+        spin: &mut DVec3,
+    ) -> ImageTransform {
+        if let Some(w) = &self.wedge {
+            let turns = self.wedge_turns(*position);
+            if turns == 0 {
+                return ImageTransform::IDENTITY;
+            }
+            let m = w.rotation(-turns);
+            *position = m * *position;
+            *velocity = m * *velocity;
+            *spin = m * *spin;
+            return ImageTransform {
+                rotation: Some(m),
+                ..ImageTransform::IDENTITY
+            };
+        }
+        let before = *position;
+        self.wrap_translation(position, velocity);
+        ImageTransform {
+            shift: *position - before,
+            ..ImageTransform::IDENTITY
+        }
+    }
+
+    /// How many wedge angles `Φ` the azimuth of `r` lies outside `[0, Φ)` (zero without a
+    /// wedge): [`Domain::wrap`] rotates such a particle by `−turns · Φ`.
+    pub fn wedge_turns(&self, r: DVec3) -> i32 {
+        self.wedge.map_or(0, |w| wedge_turns(w.angle, r))
+    }
+
+    fn wrap_translation(&self, position: &mut DVec3, velocity: &mut DVec3) {
         let l = self.lengths();
         if let Some(le) = &self.lees_edwards {
             let mut k = ((position.y - self.lo.y) / l.y).floor();
@@ -281,6 +462,25 @@ impl Domain {
     }
 }
 
+/// How many wedge angles `Φ` the azimuth of `r` lies outside `[0, Φ)`: `⌊φ/Φ⌋` with `φ`
+/// measured in `(−π, π]`, corrected where rounding leaves the rotated position on a face.
+fn wedge_turns(angle: f64, r: DVec3) -> i32 {
+    let phi = r.y.atan2(r.x);
+    let mut turns = (phi / angle).floor() as i32;
+    // The rotated azimuth must land in [0, Φ); fix the rare off-by-one at a face.
+    for _ in 0..2 {
+        let back = phi - turns as f64 * angle;
+        if back < 0.0 {
+            turns -= 1;
+        } else if back >= angle {
+            turns += 1;
+        } else {
+            break;
+        }
+    }
+    turns
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -301,8 +501,8 @@ mod tests {
     fn wrap_only_periodic_axes() {
         let d = cube();
         let mut r = DVec3::new(-0.5, 4.5, 3.0);
-        let mut v = DVec3::ZERO;
-        d.wrap(&mut r, &mut v);
+        let (mut v, mut w) = (DVec3::ZERO, DVec3::ZERO);
+        d.wrap(&mut r, &mut v, &mut w);
         assert_eq!(r, DVec3::new(1.5, 0.5, 3.0));
     }
 

@@ -8,18 +8,15 @@
 //! colouring; the ordered reduction makes a run bit-identical for a given thread count,
 //! whatever rayon's work stealing does. The price is one extra buffer pass per extra
 //! thread, small against the pair work on a few cores.
+//!
+//! A partner seen through a rotated image (a wedge face) receives the reaction rotated back
+//! into its own frame, `−Rᵀ f` and `Rᵀ τ_j`. What is measured besides the forces is up to
+//! the [`ContactObserver`] of the call.
 
 use crate::contact::{ContactHistory, ContactTable, PairKinematics};
 use crate::domain::{IDENTITY_IMAGE, IMAGE_COUNT, ImageTransform};
-use crate::measure::{ContactSums, outer};
-
-/// Measurement level: forces only.
-pub const MEASURE_NONE: u8 = 0;
-/// Measurement level: forces and the contact stress sum.
-pub const MEASURE_STRESS: u8 = 1;
-/// Measurement level: forces and every contact observable (stress, energy, counts).
-pub const MEASURE_ALL: u8 = 2;
 use crate::neighbor::NeighborList;
+use crate::observe::{ContactObserver, ContactView};
 use crate::particles::Particles;
 use glam::DVec3;
 use rayon::prelude::*;
@@ -38,6 +35,7 @@ struct Inputs<'a> {
     omega: &'a [DVec3],
     radius: &'a [f64],
     id: &'a [u32],
+    part: &'a [u16],
     inv_mass: &'a [f64],
     species: &'a [u16],
     offsets: &'a [u32],
@@ -53,9 +51,9 @@ struct Inputs<'a> {
 /// Zeroes the particle forces and torques and adds every pair force of the list, advancing
 /// contact history over `dt` (s). `flow_rate` (1/s) is subtracted as `γ̇ l_y x̂` from each
 /// contact's relative velocity (zero in the lab frame; see `LeesEdwards::peculiar_contacts`).
-/// With `LEVEL` = [`MEASURE_STRESS`] it also sums the contact stress; with [`MEASURE_ALL`]
-/// every contact observable.
-pub fn pair_forces<const LEVEL: u8>(
+/// Every interacting pair is shown to the observer `O`, whose merged observations are
+/// returned.
+pub fn pair_forces<O: ContactObserver>(
     particles: &mut Particles,
     list: &mut NeighborList,
     laws: &ContactTable,
@@ -63,7 +61,7 @@ pub fn pair_forces<const LEVEL: u8>(
     flow_rate: f64,
     dt: f64,
     scratch: &mut ForceScratch,
-) -> ContactSums {
+) -> O {
     let n = particles.len();
     let chunks = rayon::current_num_threads().max(1).min(n.max(1));
     let bounds = list.chunk_bounds(chunks);
@@ -74,6 +72,7 @@ pub fn pair_forces<const LEVEL: u8>(
         omega: &particles.angular_velocity,
         radius: &particles.radius,
         id: &particles.id,
+        part: &particles.part,
         inv_mass: &particles.inv_mass,
         species: &particles.species,
         offsets: slices.offsets,
@@ -113,10 +112,10 @@ pub fn pair_forces<const LEVEL: u8>(
         jobs.push((lo..hi, t_here, h_here, f, t));
     }
 
-    let partial: Vec<ContactSums> = jobs
+    let partial: Vec<O> = jobs
         .into_par_iter()
         .map(|(range, active, history, force, torque)| {
-            chunk_forces::<LEVEL>(&inputs, range, active, history, force, torque)
+            chunk_forces::<O>(&inputs, range, active, history, force, torque)
         })
         .collect();
 
@@ -137,24 +136,24 @@ pub fn pair_forces<const LEVEL: u8>(
             });
     }
 
-    let mut total = ContactSums::default();
-    for p in &partial {
-        total.add(p);
+    let mut total = O::default();
+    for p in partial {
+        total.merge(p);
     }
     total
 }
 
 /// Forces of the pairs whose first slot lies in `range`.
 #[inline(never)]
-fn chunk_forces<const LEVEL: u8>(
+fn chunk_forces<O: ContactObserver>(
     inp: &Inputs<'_>,
     range: std::ops::Range<usize>,
     active: &mut [bool],
     history: &mut [ContactHistory],
     force: &mut [DVec3],
     torque: &mut [DVec3],
-) -> ContactSums {
-    let mut obs = ContactSums::default();
+) -> O {
+    let mut obs = O::default();
     let base = inp.offsets[range.start] as usize;
     for i in range {
         let r_i = inp.position[i];
@@ -211,19 +210,26 @@ fn chunk_forces<const LEVEL: u8>(
             active[local] = true;
             f_i += pf.force;
             t_i += pf.torque_i;
-            force[j] -= pf.force;
-            torque[j] += pf.torque_j;
-            if LEVEL == MEASURE_ALL {
-                obs.add_pair(
-                    &pf,
-                    &kin,
-                    law.elastic_energy(kin.overlap, a_i, kin.radius_j, h),
+            if image.rotation.is_none() {
+                force[j] -= pf.force;
+                torque[j] += pf.torque_j;
+            } else {
+                force[j] -= image.vector_back(pf.force);
+                torque[j] += image.vector_back(pf.torque_j);
+            }
+            if O::OBSERVES {
+                obs.visit(&ContactView {
+                    ids: [inp.id[i], inp.id[j]],
+                    parts: [inp.part[i], inp.part[j]],
+                    wall: None,
+                    image,
+                    position: r_i,
                     branch,
-                    [inp.id[i], inp.id[j]],
-                    false,
-                );
-            } else if LEVEL == MEASURE_STRESS {
-                obs.stress_sum += outer(pf.force, branch);
+                    kinematics: &kin,
+                    force: &pf,
+                    law,
+                    history: h,
+                });
             }
         }
         force[i] += f_i;

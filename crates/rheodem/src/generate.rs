@@ -72,8 +72,8 @@ pub fn insert_random(
     for o in obstacles {
         match *o {
             Obstacle::Sphere(c, r) => {
-                let (mut c, mut v) = (c, DVec3::ZERO);
-                domain.wrap(&mut c, &mut v);
+                let (mut c, mut v, mut w) = (c, DVec3::ZERO, DVec3::ZERO);
+                domain.wrap(&mut c, &mut v, &mut w);
                 grid.entry(key(c)).or_default().push((c, r));
             }
             Obstacle::Plane(p, n) => planes.push((p, n)),

@@ -58,6 +58,7 @@ pub mod integrate;
 pub mod io;
 pub mod measure;
 pub mod neighbor;
+pub mod observe;
 pub mod particles;
 pub mod plot;
 pub mod rheology;

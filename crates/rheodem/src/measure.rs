@@ -3,6 +3,7 @@
 
 use crate::contact::{PairForce, PairKinematics};
 use crate::domain::Domain;
+use crate::observe::{ContactObserver, ContactView};
 use crate::particles::Particles;
 use crate::sanity::DeepestContact;
 use glam::{DMat3, DVec3};
@@ -87,6 +88,24 @@ impl ContactSums {
         } else {
             self.attracting_apart += 1;
         }
+    }
+}
+
+impl ContactObserver for ContactSums {
+    #[inline]
+    fn visit(&mut self, c: &ContactView<'_>) {
+        let pair = [c.ids[0], c.ids[1]];
+        self.add_pair(
+            c.force,
+            c.kinematics,
+            c.elastic_energy(),
+            c.branch,
+            pair,
+            c.wall.is_some(),
+        );
+    }
+    fn merge(&mut self, other: Self) {
+        self.add(&other);
     }
 }
 

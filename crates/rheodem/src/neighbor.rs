@@ -17,7 +17,7 @@
 //! mean flow itself.
 
 use crate::contact::ContactHistory;
-use crate::domain::{Domain, IDENTITY_IMAGE, image_code};
+use crate::domain::{Domain, IDENTITY_IMAGE, IMAGE_COUNT, ImageTransform, image_code};
 use crate::particles::{Motion, Particles};
 use glam::{DMat3, DVec3};
 use rayon::prelude::*;
@@ -40,6 +40,30 @@ pub enum NeighborError {
         /// The neighbour cutoff (m).
         cutoff: f64,
     },
+    /// A wedge so narrow that a particle near its inner radius would reach its own image.
+    #[error(
+        "the wedge is too narrow: at its inner radius {radius:.6e} m an angle of {angle_deg:.4}° \
+         leaves a chord shorter than the reach of a particle to its own image ({cutoff:.6e} m = \
+         largest diameter + interaction range); the angle must be at least {min_deg:.4}°"
+    )]
+    WedgeTooNarrow {
+        /// The wedge's inner radius (m).
+        radius: f64,
+        /// The wedge angle (degrees).
+        angle_deg: f64,
+        /// The reach (m).
+        cutoff: f64,
+        /// The smallest angle that works (degrees).
+        min_deg: f64,
+    },
+}
+
+/// The smallest wedge angle (rad) whose chord `2 r sin(Φ/2)` at radius `radius` (m) is at
+/// least `reach` (m), so that no particle reaches its own image; `None` if no angle up to
+/// `π` does.
+pub fn min_wedge_angle(radius: f64, reach: f64) -> Option<f64> {
+    let s = reach / (2.0 * radius);
+    (radius > 0.0 && s <= 1.0).then(|| 2.0 * s.asin())
 }
 
 /// Particles per block of the parallel neighbour build.
@@ -62,6 +86,8 @@ pub struct NeighborList {
     reference_epoch: u64,
     reference_lo: DVec3,
     interaction_cutoff: f64,
+    #[serde(skip)]
+    last_rotations: Vec<(u32, DMat3)>,
     /// Number of builds so far.
     pub builds: u64,
 }
@@ -149,32 +175,56 @@ impl NeighborList {
             >= self.skin
     }
 
-    /// Rebuilds the list: wraps positions into the box, re-sorts particles by cell, finds all
-    /// pairs within cutoff and carries the contact history over by particle id.
+    /// Rebuilds the list: wraps positions into the region, re-sorts particles by cell, finds
+    /// all pairs within cutoff and carries the contact history over by particle ids and the
+    /// pair's wedge image. Particles appended since the last build (insertion) start
+    /// without history; every other pair keeps its springs and bridges.
     pub fn build(
         &mut self,
         particles: &mut Particles,
         domain: &Domain,
     ) -> Result<(), NeighborError> {
-        let old = self.history_by_id(particles);
-
-        for ((r, v), motion) in particles
-            .position
-            .iter_mut()
-            .zip(particles.velocity.iter_mut())
-            .zip(particles.motion.iter_mut())
-        {
-            let before = *r;
-            domain.wrap(r, v);
+        // Wrap first, remembering the wedge turns of every particle (by id) so that the
+        // history of a pair follows its particles through the faces.
+        let images = domain.image_transforms();
+        let mut turns = vec![0i32; particles.len()];
+        let mut rotated = Vec::new();
+        for i in 0..particles.len() {
+            let k = domain.wedge_turns(particles.position[i]);
+            let moved = domain.wrap(
+                &mut particles.position[i],
+                &mut particles.velocity[i],
+                &mut particles.angular_velocity[i],
+            );
             // A rotating wall particle moved to its periodic image rotates about the
             // image of its axis.
-            if let Motion::Rotating { center, .. } = motion {
-                *center += *r - before;
+            if let Motion::Rotating { center, axis, .. } = &mut particles.motion[i] {
+                *center = moved.position(*center);
+                *axis = moved.angular_velocity(*axis);
+            }
+            if let Some(m) = moved.rotation {
+                let id = particles.id[i];
+                turns[id as usize] = k;
+                rotated.push((id, m));
             }
         }
+        self.last_rotations = rotated;
+        let old = self.history_by_key(particles, domain, &images, &turns);
 
         let a_max = particles.radius.iter().copied().fold(0.0, f64::max);
         let cutoff = 2.0 * a_max + self.range + self.skin;
+        if let Some(w) = &domain.wedge {
+            let reach = 2.0 * a_max + self.range;
+            if 2.0 * w.inner_radius * (0.5 * w.angle).sin() < reach {
+                return Err(NeighborError::WedgeTooNarrow {
+                    radius: w.inner_radius,
+                    angle_deg: w.angle.to_degrees(),
+                    cutoff: reach,
+                    min_deg: min_wedge_angle(w.inner_radius, reach)
+                        .map_or(f64::INFINITY, f64::to_degrees),
+                });
+            }
+        }
         let grid = CellGrid::new(domain, cutoff)?;
 
         // Stable counting sort by cell: deterministic, and neighbours end up close in memory.
@@ -198,12 +248,13 @@ impl NeighborList {
         }
         particles.permute(&order);
 
-        self.find_pairs(particles, &grid, &start);
+        self.find_pairs(particles, &grid, &start, domain);
 
         self.active = vec![false; self.partner.len()];
         self.history = vec![ContactHistory::default(); self.partner.len()];
         if !old.is_empty() {
-            let (offsets, partner, ids) = (&self.offsets, &self.partner, &particles.id);
+            let (offsets, partner, image, ids) =
+                (&self.offsets, &self.partner, &self.image, &particles.id);
             let restored: Vec<Vec<(usize, ContactHistory)>> =
                 (0..particles.len().div_ceil(BUILD_BLOCK))
                     .into_par_iter()
@@ -213,10 +264,15 @@ impl NeighborList {
                             let id_i = ids[i];
                             for k in offsets[i] as usize..offsets[i + 1] as usize {
                                 let id_j = ids[partner[k] as usize];
+                                let c = domain.image_turns(image[k]);
                                 let h = if id_i < id_j {
-                                    old.get(&(id_i, id_j)).copied()
+                                    old.get(&(id_i, id_j, c)).copied()
                                 } else {
-                                    old.get(&(id_j, id_i)).map(ContactHistory::flipped)
+                                    // Kept in j's frame for the order (j, i): flip the order
+                                    // and rotate into i's frame, where j is seen through
+                                    // this pair's image.
+                                    old.get(&(id_j, id_i, -c))
+                                        .map(|h| h.flipped().rotated(&images[image[k] as usize]))
                                 };
                                 if let Some(h) = h {
                                     found.push((k, h));
@@ -241,13 +297,38 @@ impl NeighborList {
         Ok(())
     }
 
-    /// Live contact histories keyed by `(lower id, higher id)`, oriented from the lower id.
-    fn history_by_id(&self, particles: &Particles) -> FxHashMap<(u32, u32), ContactHistory> {
+    /// The particles (ids) that the last build rotated through a wedge face, with the
+    /// rotation applied; analytic walls rotate their per-particle history with them.
+    pub fn last_rotations(&self) -> &[(u32, DMat3)] {
+        &self.last_rotations
+    }
+
+    /// Live contact histories of the list as it stood before this build, keyed by
+    /// `(lower id, higher id, wedge turns of the higher seen from the lower)` and expressed
+    /// in the lower particle's frame after this build's wraps (`turns[id]` multiples of
+    /// `Φ`, the particle rotated by `−turns·Φ`). Under translations only, the key's turns
+    /// are zero and histories are not transformed: a box of at least three cutoffs per
+    /// periodic axis sees each pair through one image only.
+    fn history_by_key(
+        &self,
+        particles: &Particles,
+        domain: &Domain,
+        images: &[ImageTransform; IMAGE_COUNT],
+        turns: &[i32],
+    ) -> FxHashMap<(u32, u32, i32), ContactHistory> {
         let mut map = FxHashMap::default();
-        if self.offsets.len() != particles.len() + 1 {
-            return map;
-        }
-        for i in 0..particles.len() {
+        // Rows exist for the particles present at the last build; particles appended since
+        // (insertion) sit in the slots after them and have no history yet.
+        let rows = self.offsets.len().saturating_sub(1).min(particles.len());
+        let turn = |id: u32| turns[id as usize];
+        let into_frame = |h: ContactHistory, id: u32| match domain.wedge {
+            Some(w) if turn(id) != 0 => h.rotated(&ImageTransform {
+                rotation: Some(w.rotation(-turn(id))),
+                ..ImageTransform::IDENTITY
+            }),
+            _ => h,
+        };
+        for i in 0..rows {
             let id_i = particles.id[i];
             for k in self.offsets[i] as usize..self.offsets[i + 1] as usize {
                 if !self.active[k] {
@@ -255,10 +336,14 @@ impl NeighborList {
                 }
                 let id_j = particles.id[self.partner[k] as usize];
                 let h = self.history[k];
+                let c = domain.image_turns(self.image[k]);
                 if id_i < id_j {
-                    map.insert((id_i, id_j), h);
+                    let key = (id_i, id_j, c + turn(id_i) - turn(id_j));
+                    map.insert(key, into_frame(h, id_i));
                 } else {
-                    map.insert((id_j, id_i), h.flipped());
+                    let seen_from_j = h.rotated_back(&images[self.image[k] as usize]).flipped();
+                    let key = (id_j, id_i, -c + turn(id_j) - turn(id_i));
+                    map.insert(key, into_frame(seen_from_j, id_j));
                 }
             }
         }
@@ -266,15 +351,27 @@ impl NeighborList {
     }
 
     /// Finds every pair within cutoff, rows in blocks of particles searched in parallel and
-    /// concatenated in slot order (so the list does not depend on the thread count).
-    fn find_pairs(&mut self, particles: &Particles, grid: &CellGrid, start: &[u32]) {
+    /// concatenated in slot order (so the list does not depend on the thread count). Each
+    /// particle searches the cells around itself (with the translations of the periodic
+    /// axes) and, near a wedge face, around the rotated query position of each wedge image.
+    fn find_pairs(
+        &mut self,
+        particles: &Particles,
+        grid: &CellGrid,
+        start: &[u32],
+        domain: &Domain,
+    ) {
         let n = particles.len();
         let pos = &particles.position;
         let rad = &particles.radius;
         let free: Vec<bool> = particles.motion.iter().map(|m| m.is_free()).collect();
         let reach = self.range + self.skin;
+        let cutoff = grid.cutoff;
         let lengths = grid.lengths;
         let le_shift = grid.shear_shift;
+        let rotated = domain.rotated_images();
+        let images = domain.image_transforms();
+        let wedge = domain.wedge;
         let row_of = |i: usize, row: &mut Vec<(u32, u8)>| {
             row.clear();
             let ci = grid.cell_coords(pos[i]);
@@ -299,6 +396,36 @@ impl NeighborList {
                             let d = pos[i] - (pos[j] + shift);
                             if d.length_squared() < cut * cut {
                                 row.push((j as u32, code));
+                            }
+                        }
+                    }
+                }
+            }
+            // Wedge images: j seen at R r_j is within reach of r_i where R⁻¹ r_i is within
+            // reach of r_j; only query positions within a cutoff of the wedge can find one.
+            for &(code, inverse) in &rotated {
+                let q = inverse * pos[i];
+                if wedge.is_some_and(|w| w.distance(q) >= cutoff) {
+                    continue;
+                }
+                let image = &images[code as usize];
+                let cq = grid.cell_coords(q);
+                for dz in -1..=1 {
+                    for dy in -1..=1 {
+                        for dx in -1..=1 {
+                            let Some((cell, _)) = grid.neighbor(q, cq, [dx, dy, dz]) else {
+                                continue;
+                            };
+                            let (lo, hi) = (start[cell] as usize, start[cell + 1] as usize);
+                            for j in lo.max(i + 1)..hi.max(i + 1) {
+                                if !free[i] && !free[j] {
+                                    continue;
+                                }
+                                let cut = rad[i] + rad[j] + reach;
+                                let d = pos[i] - image.position(pos[j]);
+                                if d.length_squared() < cut * cut {
+                                    row.push((j as u32, code));
+                                }
                             }
                         }
                     }
@@ -399,6 +526,8 @@ struct CellGrid {
     periodic: [bool; 3],
     /// Lees-Edwards shift of the images across `y` (m); zero without shear.
     shear_shift: f64,
+    /// The neighbour cutoff the cells are sized for (m).
+    cutoff: f64,
 }
 
 impl CellGrid {
@@ -423,6 +552,7 @@ impl CellGrid {
             dims,
             periodic: domain.periodic,
             shear_shift: domain.lees_edwards.map_or(0.0, |le| le.shift),
+            cutoff,
         })
     }
 

@@ -4,6 +4,7 @@
 //! current *slot*. Slots change when the neighbour list re-sorts particles by cell; the
 //! permanent identity of a particle is its [`Particles::id`]. All quantities are SI.
 
+use crate::observe::NO_PART;
 use glam::DVec3;
 use serde::{Deserialize, Serialize};
 
@@ -78,6 +79,10 @@ pub struct Particles {
     pub species: Vec<u16>,
     /// Motion kind of each particle.
     pub motion: Vec<Motion>,
+    /// Wall part of each particle ([`NO_PART`] for particles of no part), see
+    /// [`crate::observe::PartLoads`].
+    #[serde(default)]
+    pub part: Vec<u16>,
 }
 
 impl Particles {
@@ -120,6 +125,15 @@ impl Particles {
             .push(if free { 1.0 / inertia } else { 0.0 });
         self.species.push(s.species);
         self.motion.push(s.motion);
+        self.part.push(NO_PART);
+    }
+
+    /// Appends a sphere as [`Particles::push`] does, as a member of wall part `part`.
+    pub fn push_in_part(&mut self, s: Sphere, density: f64, part: u16) {
+        self.push(s, density);
+        if let Some(p) = self.part.last_mut() {
+            *p = part;
+        }
     }
 
     /// Reads back the sphere in slot `i`.
@@ -161,6 +175,7 @@ impl Particles {
         apply(&mut self.inv_inertia, order);
         apply(&mut self.species, order);
         apply(&mut self.motion, order);
+        apply(&mut self.part, order);
     }
 
     /// Total volume of the free particles (m³).

@@ -6,16 +6,17 @@
 
 use crate::contact::ContactTable;
 use crate::domain::Domain;
-use crate::forces::{ForceScratch, MEASURE_ALL, MEASURE_NONE, MEASURE_STRESS, pair_forces};
+use crate::forces::{ForceScratch, pair_forces};
 use crate::integrate::{add_gravity, drift, kick};
 use crate::measure::{
     ContactSums, Observables, granular_temperature, kinetic_energies, kinetic_stress_sum, to_rows,
 };
 use crate::neighbor::{NeighborError, NeighborList};
-use crate::particles::Particles;
+use crate::observe::{ContactObserver, PartLoads, StressSum};
+use crate::particles::{Particles, Sphere};
 use crate::sanity::{self, DeepestContact, Instability, Limits};
 use crate::stress_control::StressControl;
-use crate::walls::PlaneWall;
+use crate::walls::Wall;
 use glam::DVec3;
 use serde::{Deserialize, Serialize};
 
@@ -28,8 +29,11 @@ pub struct Simulation {
     pub domain: Domain,
     /// Contact laws per species pair.
     pub laws: ContactTable,
-    /// Planar walls.
-    pub walls: Vec<PlaneWall>,
+    /// Smooth analytic walls (planes, cylinders).
+    pub walls: Vec<Wall>,
+    /// Names of the wall parts, indexed by the part numbers of particles and walls.
+    #[serde(default)]
+    pub parts: Vec<String>,
     /// Verlet list and contact history.
     pub neighbors: NeighborList,
     /// Gravitational acceleration (m/s²).
@@ -49,6 +53,9 @@ pub struct Simulation {
     pub limits: Limits,
     /// Contact sums of the last measuring force evaluation and its step.
     measured: (u64, ContactSums),
+    /// Loads on the wall parts at the last measuring force evaluation.
+    #[serde(default)]
+    part_loads: PartLoads,
     #[serde(skip)]
     scratch: ForceScratch,
 }
@@ -113,7 +120,7 @@ impl Simulation {
         particles: Particles,
         domain: Domain,
         laws: ContactTable,
-        walls: Vec<PlaneWall>,
+        walls: Vec<Wall>,
         gravity: DVec3,
         dt: f64,
         skin: f64,
@@ -124,6 +131,7 @@ impl Simulation {
             domain,
             laws,
             walls,
+            parts: Vec::new(),
             neighbors: NeighborList::new(skin, range),
             gravity,
             dt,
@@ -133,6 +141,7 @@ impl Simulation {
             sigma_yy: 0.0,
             limits: Limits::default(),
             measured: (0, ContactSums::default()),
+            part_loads: PartLoads::default(),
             scratch: ForceScratch::default(),
         };
         // Give prescribed particles the velocities of their motion law.
@@ -177,15 +186,61 @@ impl Simulation {
     /// Rebuilds the neighbour list if particles or images have moved far enough.
     pub fn refresh_neighbors(&mut self) -> Result<(), NeighborError> {
         if self.neighbors.needs_rebuild(&self.particles, &self.domain) {
-            self.neighbors.build(&mut self.particles, &self.domain)?;
+            self.rebuild_neighbors()?;
         }
         Ok(())
     }
 
+    /// Rebuilds the neighbour list now; walls rotate the history of particles that crossed
+    /// a wedge face with them.
+    pub fn rebuild_neighbors(&mut self) -> Result<(), NeighborError> {
+        self.neighbors.build(&mut self.particles, &self.domain)?;
+        for &(id, rotation) in self.neighbors.last_rotations() {
+            for wall in &mut self.walls {
+                wall.rotate_history(id, rotation);
+            }
+        }
+        Ok(())
+    }
+
+    /// Inserts spheres of the given densities (kg/m³) during a run, each in wall part
+    /// `part` (or [`crate::observe::NO_PART`]), and returns their ids. Every existing
+    /// contact keeps its springs and bridges; the new particles enter the neighbour list
+    /// and the walls at once, and their forces are evaluated (without measurement).
+    pub fn insert(&mut self, spheres: &[(Sphere, f64, u16)]) -> Result<Vec<u32>, NeighborError> {
+        let first = self.particles.len() as u32;
+        for &(s, density, part) in spheres {
+            self.particles.push_in_part(s, density, part);
+        }
+        self.rebuild_neighbors()?;
+        self.compute_forces(false);
+        Ok((first..self.particles.len() as u32).collect())
+    }
+
     /// Evaluates all forces and torques at the current positions and velocities, with
-    /// every contact observable when `measure` (the contact stress alone is always summed
-    /// under stress control, which needs `σ_yy` every step).
+    /// every contact observable and the loads on the wall parts when `measure` (the
+    /// contact stress alone is always summed under stress control, which needs `σ_yy`
+    /// every step).
     pub fn compute_forces(&mut self, measure: bool) {
+        if measure {
+            let (sums, loads) = self.compute_forces_with::<(ContactSums, PartLoads)>();
+            self.measured = (self.step, sums);
+            self.part_loads = loads;
+            if self.stress_control.is_some() {
+                self.update_sigma_yy(sums.stress_sum);
+            }
+        } else if self.stress_control.is_some() {
+            let StressSum(sum) = self.compute_forces_with::<StressSum>();
+            self.update_sigma_yy(sum);
+        } else {
+            self.compute_forces_with::<()>();
+        }
+    }
+
+    /// Evaluates all forces and torques (pairs, walls, gravity), showing every interacting
+    /// contact to a fresh observer `O`, and returns its observations. This is the hook for
+    /// measurements defined outside the engine (contact snapshots, coarse-graining).
+    pub fn compute_forces_with<O: ContactObserver>(&mut self) -> O {
         let images = self.domain.image_transforms();
         let flow = self.domain.contact_flow_rate();
         let (p, nb, laws, dt, scratch) = (
@@ -195,25 +250,29 @@ impl Simulation {
             self.dt,
             &mut self.scratch,
         );
-        let mut sums = if measure {
-            pair_forces::<MEASURE_ALL>(p, nb, laws, &images, flow, dt, scratch)
-        } else if self.stress_control.is_some() {
-            pair_forces::<MEASURE_STRESS>(p, nb, laws, &images, flow, dt, scratch)
-        } else {
-            pair_forces::<MEASURE_NONE>(p, nb, laws, &images, flow, dt, scratch)
-        };
+        let mut obs = pair_forces::<O>(p, nb, laws, &images, flow, dt, scratch);
         for (index, wall) in self.walls.iter_mut().enumerate() {
-            let w = wall.apply(index as u32, &mut self.particles, &self.laws, self.dt);
-            sums.add(&w);
+            wall.apply(
+                index as u32,
+                &mut self.particles,
+                &self.laws,
+                self.dt,
+                &mut obs,
+            );
         }
         add_gravity(&mut self.particles, self.gravity);
-        if measure {
-            self.measured = (self.step, sums);
-        }
-        if self.stress_control.is_some() {
-            let kinetic = kinetic_stress_sum(&self.particles, &self.domain);
-            self.sigma_yy = (kinetic.y_axis.y + sums.stress_sum.y_axis.y) / self.domain.volume();
-        }
+        obs
+    }
+
+    fn update_sigma_yy(&mut self, contact_sum: glam::DMat3) {
+        let kinetic = kinetic_stress_sum(&self.particles, &self.domain);
+        self.sigma_yy = (kinetic.y_axis.y + contact_sum.y_axis.y) / self.domain.volume();
+    }
+
+    /// Loads on the wall parts at the last measurement (index = part number; parts that
+    /// had no contact may be missing at the end).
+    pub fn part_loads(&self) -> &[crate::observe::PartLoad] {
+        &self.part_loads.0
     }
 
     /// Switches on control of `σ_yy` (Lees-Edwards box), starting from the stress of the

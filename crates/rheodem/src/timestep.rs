@@ -2,7 +2,7 @@
 
 use crate::contact::ContactTable;
 use crate::particles::Particles;
-use crate::walls::PlaneWall;
+use crate::walls::Wall;
 
 /// Default fraction of the shortest contact time used as time step: `dt = t_c / 50`.
 pub const DEFAULT_FRACTION: f64 = 1.0 / 50.0;
@@ -33,7 +33,7 @@ pub enum TimeStepError {
 pub fn shortest_contact_time(
     particles: &Particles,
     laws: &ContactTable,
-    walls: &[PlaneWall],
+    walls: &[Wall],
 ) -> Result<f64, TimeStepError> {
     let ns = laws.species();
     let mut lightest_free = vec![f64::INFINITY; ns];

@@ -1,56 +1,160 @@
-//! Infinite planar walls: fixed, infinitely heavy, with the contact law of their species.
+//! Smooth analytic walls: infinite planes and cylinders, fixed and infinitely heavy, with
+//! the contact law of their species (docs/model.md §4.1).
 
 use crate::contact::{ContactHistory, ContactTable, PairKinematics};
-use crate::measure::ContactSums;
+use crate::domain::ImageTransform;
+use crate::observe::{ContactObserver, ContactView, NO_PART};
 use crate::particles::Particles;
-use glam::DVec3;
+use glam::{DMat3, DVec3};
 use serde::{Deserialize, Serialize};
 
-/// An infinite fixed plane through `point` with unit `normal` pointing into the granular
-/// region; spheres on that side touch it when closer than their radius.
+/// The geometry of a smooth wall.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub enum WallShape {
+    /// The plane through `point` with unit `normal` pointing into the granular region.
+    Plane {
+        /// A point on the plane (m).
+        point: DVec3,
+        /// Unit normal towards the particles.
+        normal: DVec3,
+    },
+    /// The cylinder of `radius` about the axis through `point` along the unit `axis`;
+    /// particles are inside it (`inside`, an outer wall) or outside it (an inner wall).
+    Cylinder {
+        /// A point on the axis (m).
+        point: DVec3,
+        /// Unit vector along the axis.
+        axis: DVec3,
+        /// Radius (m).
+        radius: f64,
+        /// Whether the particles are inside the cylinder.
+        inside: bool,
+    },
+}
+
+impl WallShape {
+    /// Gap between the surface and the centre `r` (m, negative behind the wall) and the
+    /// unit normal from the wall towards `r`.
+    #[inline]
+    pub fn gap(&self, r: DVec3) -> (f64, DVec3) {
+        match *self {
+            WallShape::Plane { point, normal } => ((r - point).dot(normal), normal),
+            WallShape::Cylinder {
+                point,
+                axis,
+                radius,
+                inside,
+            } => {
+                let d = r - point;
+                let radial = d - axis * d.dot(axis);
+                let rho = radial.length();
+                // On the axis the direction is arbitrary; any radial unit vector will do.
+                let e = if rho > 0.0 {
+                    radial / rho
+                } else {
+                    axis.any_orthonormal_vector()
+                };
+                if inside {
+                    (radius - rho, -e)
+                } else {
+                    (rho - radius, e)
+                }
+            }
+        }
+    }
+}
+
+/// A smooth fixed wall.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct PlaneWall {
-    /// A point on the plane (m).
-    pub point: DVec3,
-    /// Unit normal pointing towards the particles.
-    pub normal: DVec3,
+pub struct Wall {
+    /// Its geometry.
+    pub shape: WallShape,
     /// Species of the wall material (selects the contact law with each particle species).
     pub species: u16,
-    /// Contact history per particle id.
+    /// Wall part it belongs to ([`NO_PART`] for none).
+    #[serde(default = "no_part")]
+    pub part: u16,
+    /// Contact history per particle id (grown as particles are inserted).
     history: Vec<ContactHistory>,
     /// Whether each particle id interacts with the wall.
     active: Vec<bool>,
 }
 
-impl PlaneWall {
-    /// A wall for `particle_count` particles; `normal` is normalised here.
-    pub fn new(point: DVec3, normal: DVec3, species: u16, particle_count: usize) -> PlaneWall {
-        PlaneWall {
-            point,
-            normal: normal.normalize(),
+fn no_part() -> u16 {
+    NO_PART
+}
+
+impl Wall {
+    /// A wall of the given shape and species, in no part.
+    pub fn new(shape: WallShape, species: u16) -> Wall {
+        Wall {
+            shape,
             species,
-            history: vec![ContactHistory::default(); particle_count],
-            active: vec![false; particle_count],
+            part: NO_PART,
+            history: Vec::new(),
+            active: Vec::new(),
+        }
+    }
+
+    /// The plane through `point` (m) with `normal` (normalised here) towards the particles.
+    pub fn plane(point: DVec3, normal: DVec3, species: u16) -> Wall {
+        Wall::new(
+            WallShape::Plane {
+                point,
+                normal: normal.normalize(),
+            },
+            species,
+        )
+    }
+
+    /// A cylinder of `radius` (m) about the axis through `point` along `axis` (normalised
+    /// here), with the particles `inside` or outside it.
+    pub fn cylinder(point: DVec3, axis: DVec3, radius: f64, inside: bool, species: u16) -> Wall {
+        Wall::new(
+            WallShape::Cylinder {
+                point,
+                axis: axis.normalize(),
+                radius,
+                inside,
+            },
+            species,
+        )
+    }
+
+    /// Rotates the history of particle `id` with the particle (a wrap through a wedge face
+    /// turned it by `rotation`; the wall is symmetric about the wedge axis).
+    pub fn rotate_history(&mut self, id: u32, rotation: DMat3) {
+        let image = ImageTransform {
+            rotation: Some(rotation),
+            ..ImageTransform::IDENTITY
+        };
+        if let Some(h) = self.history.get_mut(id as usize) {
+            *h = h.rotated(&image);
         }
     }
 
     /// Adds the wall's forces and torques to the free particles, advancing contact history
-    /// over `dt` (s); `index` names the wall in the contact sums.
-    pub fn apply(
+    /// over `dt` (s), and shows every interacting contact to `obs`; `index` names the wall.
+    pub fn apply<O: ContactObserver>(
         &mut self,
         index: u32,
         particles: &mut Particles,
         laws: &ContactTable,
         dt: f64,
-    ) -> ContactSums {
-        let mut obs = ContactSums::default();
+        obs: &mut O,
+    ) {
+        let ids = particles.len();
+        if self.history.len() < ids {
+            self.history.resize(ids, ContactHistory::default());
+            self.active.resize(ids, false);
+        }
         for i in 0..particles.len() {
             if !particles.motion[i].is_free() {
                 continue;
             }
             let id = particles.id[i] as usize;
             let a = particles.radius[i];
-            let gap = (particles.position[i] - self.point).dot(self.normal);
+            let (gap, normal) = self.shape.gap(particles.position[i]);
             let overlap = a - gap;
             let law = laws.get(particles.species[i], self.species);
             if overlap <= -law.range() {
@@ -61,7 +165,7 @@ impl PlaneWall {
                 continue;
             }
             let k = PairKinematics {
-                normal: self.normal,
+                normal,
                 overlap,
                 radius_i: a,
                 radius_j: f64::INFINITY,
@@ -78,16 +182,20 @@ impl PlaneWall {
             self.active[id] = true;
             particles.force[i] += f.force;
             particles.torque[i] += f.torque_i;
-            let energy = law.elastic_energy(overlap, a, f64::INFINITY, h);
-            obs.add_pair(
-                &f,
-                &k,
-                energy,
-                self.normal * gap,
-                [particles.id[i], index],
-                true,
-            );
+            if O::OBSERVES {
+                obs.visit(&ContactView {
+                    ids: [particles.id[i], index],
+                    parts: [particles.part[i], self.part],
+                    wall: Some(index),
+                    image: &ImageTransform::IDENTITY,
+                    position: particles.position[i],
+                    branch: normal * gap,
+                    kinematics: &k,
+                    force: &f,
+                    law,
+                    history: h,
+                });
+            }
         }
-        obs
     }
 }

@@ -511,8 +511,8 @@ fn wrap_maps_position_and_velocity_of_a_crossing() {
             ),
         ];
         for (r0, k) in cases {
-            let (mut r, mut v) = (r0, v0);
-            d.wrap(&mut r, &mut v);
+            let (mut r, mut v, mut w) = (r0, v0, DVec3::ZERO);
+            d.wrap(&mut r, &mut v, &mut w);
             let expected = wrap_xz(&d, DVec3::new(r0.x - k * s, r0.y - k * l.y, r0.z));
             let v_expected = DVec3::new(v0.x - k * u, v0.y, v0.z);
             let peculiar_before = v0 - d.mean_flow(r0);

@@ -18,11 +18,11 @@ use glam::{DMat3, DVec3};
 use rheodem::Simulation;
 use rheodem::contact::{Adhesion, ContactLaw, ContactTable, Damping, NormalLaw, Resistance};
 use rheodem::domain::Domain;
-use rheodem::forces::{ForceScratch, MEASURE_ALL, pair_forces};
+use rheodem::forces::{ForceScratch, pair_forces};
 use rheodem::measure::{ContactSums, kinetic_stress_sum};
 use rheodem::neighbor::NeighborList;
 use rheodem::particles::{Motion, Particles, Sphere};
-use rheodem::walls::PlaneWall;
+use rheodem::walls::Wall;
 use std::f64::consts::PI;
 
 /// Density (kg/m³).
@@ -202,7 +202,7 @@ fn measured_pairs(
 ) -> ContactSums {
     let mut list = NeighborList::new(0.2e-3, range);
     list.build(particles, domain).expect("list");
-    pair_forces::<MEASURE_ALL>(
+    pair_forces::<ContactSums>(
         particles,
         &mut list,
         &ContactTable::uniform(1, law),
@@ -556,8 +556,8 @@ fn walls_share_of_the_stress() {
         particles.push(*s, RHO);
     }
     let walls = vec![
-        PlaneWall::new(floor_point, floor_n, 0, particles.len()),
-        PlaneWall::new(lid_point, lid_n, 0, particles.len()),
+        Wall::plane(floor_point, floor_n, 0),
+        Wall::plane(lid_point, lid_n, 0),
     ];
     let sim = Simulation::new(
         particles.clone(),
@@ -604,7 +604,13 @@ fn walls_share_of_the_stress() {
     let d = rel_diff(&rows(sums.stress_sum / volume), &particle_walls);
     assert!(d < 1e-12, "particle-wall part ({d:e})");
     for (k, mut w) in walls.into_iter().enumerate() {
-        sums.add(&w.apply(k as u32, &mut particles, &ContactTable::uniform(1, law), DT));
+        w.apply(
+            k as u32,
+            &mut particles,
+            &ContactTable::uniform(1, law),
+            DT,
+            &mut sums,
+        );
     }
     let d = rel_diff(&rows(sums.stress_sum / volume), &contact);
     assert!(d < 1e-12, "contact part ({d:e})");

@@ -31,7 +31,7 @@ fn wall_force(sim: &Simulation, k: usize) -> DVec3 {
         .for_each(|f| *f = DVec3::ZERO);
     let dt = copy.dt;
     let laws = copy.laws.clone();
-    copy.walls[k].apply(k as u32, &mut copy.particles, &laws, dt);
+    copy.walls[k].apply(k as u32, &mut copy.particles, &laws, dt, &mut ());
     copy.particles.force.iter().copied().sum()
 }
 

@@ -14,6 +14,7 @@ pub mod equivalent;
 pub mod friction;
 pub mod normal;
 
+use crate::domain::ImageTransform;
 use glam::DVec3;
 use serde::{Deserialize, Serialize};
 
@@ -60,6 +61,26 @@ impl ContactHistory {
             tangential: -self.tangential,
             rolling: self.rolling,
             torsion: -self.torsion,
+            bridge: self.bridge,
+        }
+    }
+
+    /// The same history with its springs mapped into an image's frame: `R ξ` for each
+    /// spring (unchanged under a pure translation).
+    pub fn rotated(&self, image: &ImageTransform) -> ContactHistory {
+        self.map(|v| image.vector(v))
+    }
+
+    /// The same history with its springs mapped back from an image's frame: `Rᵀ ξ`.
+    pub fn rotated_back(&self, image: &ImageTransform) -> ContactHistory {
+        self.map(|v| image.vector_back(v))
+    }
+
+    fn map(&self, f: impl Fn(DVec3) -> DVec3) -> ContactHistory {
+        ContactHistory {
+            tangential: f(self.tangential),
+            rolling: f(self.rolling),
+            torsion: f(self.torsion),
             bridge: self.bridge,
         }
     }

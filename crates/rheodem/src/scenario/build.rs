@@ -15,7 +15,7 @@ use crate::particles::{Motion, Particles, Sphere};
 use crate::sanity::{DEFAULT_DISPLACEMENT, DEFAULT_OVERLAP, Instability, Limits};
 use crate::stress_control::StressControl;
 use crate::timestep::{DEFAULT_FRACTION, MAX_FRACTION, shortest_contact_time};
-use crate::walls::PlaneWall;
+use crate::walls::Wall;
 use glam::DVec3;
 use rand::SeedableRng;
 use serde::{Deserialize, Serialize};
@@ -857,9 +857,9 @@ fn assemble(s: &Scenario, base_dir: &Path) -> Result<Assembled, ScenarioError> {
         ));
     }
 
-    let plane_walls: Vec<PlaneWall> = walls
+    let plane_walls: Vec<Wall> = walls
         .iter()
-        .map(|(p, n, sp)| PlaneWall::new(*p, *n, *sp, particles.len()))
+        .map(|(p, n, sp)| Wall::plane(*p, *n, *sp))
         .collect();
     let t_c = shortest_contact_time(&particles, &laws, &plane_walls)
         .map_err(|e| invalid("contact", "(laws)", e.to_string()))?;

@@ -6,7 +6,7 @@ use rheodem::Simulation;
 use rheodem::contact::{Adhesion, ContactLaw, ContactTable, Damping, NormalLaw, Resistance};
 use rheodem::domain::Domain;
 use rheodem::particles::{Motion, Particles, Sphere};
-use rheodem::walls::PlaneWall;
+use rheodem::walls::Wall;
 
 /// Density used by the tests (kg/m³).
 pub const RHO: f64 = 2000.0;
@@ -75,7 +75,7 @@ pub fn simulation(
     }
     let walls = walls
         .into_iter()
-        .map(|(point, normal)| PlaneWall::new(point, normal, 0, p.len()))
+        .map(|(point, normal)| Wall::plane(point, normal, 0))
         .collect();
     let max_r = spheres.iter().map(|s| s.radius).fold(0.0, f64::max);
     Simulation::new(
