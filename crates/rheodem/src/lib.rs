@@ -49,6 +49,7 @@
 //! ```
 
 pub mod analysis;
+pub mod band;
 pub mod bench;
 pub mod contact;
 pub mod domain;
