@@ -2,6 +2,7 @@
 
 mod contact;
 mod shear;
+mod split_bottom;
 
 use anyhow::{Context, Result, bail};
 use clap::{Parser, Subcommand};
@@ -56,6 +57,8 @@ enum Command {
     },
     /// Stress-controlled simple shear box at given (μ_p, I, p*, Bo): steady-state φ, μ, Z, σ.
     ShearBox(shear::ShearBoxArgs),
+    /// Split-bottom ring shear cell: fill, settle, shear; wall torque and the shear band.
+    SplitBottom(split_bottom::SplitBottomArgs),
     /// Run a list or grid of shear-box points (resumable), collecting one results table.
     Sweep {
         /// The sweep file (TOML); its `out` and `results` paths are relative to it.
@@ -172,6 +175,7 @@ pub(crate) fn pool(threads: Option<usize>) -> Result<(rayon::ThreadPool, usize)>
 
 fn run(cli: Cli) -> Result<()> {
     match cli.command {
+        Command::SplitBottom(args) => split_bottom::run(args),
         Command::Run {
             scenario,
             out,

@@ -136,6 +136,18 @@ impl Particles {
         }
     }
 
+    /// Turns the particle in slot `i` into a wall particle of `part` with the prescribed
+    /// `motion` (infinitely heavy from now on; velocity and spin follow the motion from the
+    /// next drift, and are zeroed here).
+    pub fn prescribe(&mut self, i: usize, motion: Motion, part: u16) {
+        self.motion[i] = motion;
+        self.part[i] = part;
+        self.inv_mass[i] = 0.0;
+        self.inv_inertia[i] = 0.0;
+        self.velocity[i] = DVec3::ZERO;
+        self.angular_velocity[i] = DVec3::ZERO;
+    }
+
     /// Reads back the sphere in slot `i`.
     pub fn sphere(&self, i: usize) -> Sphere {
         Sphere {

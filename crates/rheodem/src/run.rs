@@ -221,6 +221,36 @@ fn checkpoint_bytes(body: &[u8]) -> Vec<u8> {
     bytes
 }
 
+/// Writes `state` atomically as a checkpoint file (header, CRC-32, MessagePack of the
+/// program version and the state).
+pub fn write_checkpoint<T: Serialize>(path: &Path, state: &T) -> Result<(), RunError> {
+    let body =
+        rmp_serde::to_vec_named(&(crate::VERSION, state)).map_err(|e| RunError::Checkpoint {
+            path: path.to_path_buf(),
+            reason: e.to_string(),
+        })?;
+    write_atomic(path, &checkpoint_bytes(&body)).map_err(io_err("write", path))
+}
+
+/// Reads a checkpoint file written by [`write_checkpoint`] under this program version.
+pub fn read_checkpoint<T: serde::de::DeserializeOwned>(path: &Path) -> Result<T, RunError> {
+    let bytes = std::fs::read(path).map_err(io_err("read", path))?;
+    let bad = |reason: String| RunError::Checkpoint {
+        path: path.to_path_buf(),
+        reason,
+    };
+    let body = checkpoint_body(&bytes).map_err(bad)?;
+    let (version, state): (String, T) =
+        rmp_serde::from_slice(body).map_err(|e| bad(e.to_string()))?;
+    if version != crate::VERSION {
+        return Err(bad(format!(
+            "written by rheodem {version}, this is {}",
+            crate::VERSION
+        )));
+    }
+    Ok(state)
+}
+
 /// The verified body of a checkpoint file, or why it is unusable.
 fn checkpoint_body(bytes: &[u8]) -> Result<&[u8], String> {
     if let Some(rest) = bytes.strip_prefix(CHECKPOINT_MAGIC.as_slice()) {
@@ -342,21 +372,7 @@ impl Run {
 
     /// [`Run::resume`] of a directory whose `lock` the caller holds.
     pub fn resume_locked(lock: Arc<DirLock>, dir: &Path) -> Result<Run, RunError> {
-        let path = dir.join("checkpoint.bin");
-        let bytes = std::fs::read(&path).map_err(io_err("read", &path))?;
-        let bad = |reason: String| RunError::Checkpoint {
-            path: path.clone(),
-            reason,
-        };
-        let body = checkpoint_body(&bytes).map_err(bad)?;
-        let (version, mut state): (String, Run) =
-            rmp_serde::from_slice(body).map_err(|e| bad(e.to_string()))?;
-        if version != crate::VERSION {
-            return Err(bad(format!(
-                "written by rheodem {version}, this is {}",
-                crate::VERSION
-            )));
-        }
+        let mut state: Run = read_checkpoint(&dir.join("checkpoint.bin"))?;
         state.checkpointed = Some(state.simulation.step);
         state.lock = Some(lock);
         Ok(state)
@@ -477,7 +493,7 @@ impl Run {
         let path = dir.join(&name);
         write_atomic(
             &path,
-            vtk::particles_vtp(&self.simulation.particles).as_bytes(),
+            vtk::particles_vtp(&self.simulation.particles, &[]).as_bytes(),
         )
         .map_err(io_err("write", &path))?;
         self.snapshots.push((self.simulation.time, name));
@@ -486,14 +502,7 @@ impl Run {
 
     /// Writes the checkpoint, then the time series, snapshot collection and summary.
     fn checkpoint(&mut self, dir: &Path, status: Status) -> Result<(), RunError> {
-        let path = dir.join("checkpoint.bin");
-        let body = rmp_serde::to_vec_named(&(crate::VERSION.to_string(), &*self)).map_err(|e| {
-            RunError::Checkpoint {
-                path: path.clone(),
-                reason: e.to_string(),
-            }
-        })?;
-        write_atomic(&path, &checkpoint_bytes(&body)).map_err(io_err("write", &path))?;
+        write_checkpoint(&dir.join("checkpoint.bin"), &*self)?;
         self.checkpointed = Some(self.simulation.step);
         self.write_outputs(dir, status, None)
     }

@@ -6,8 +6,9 @@ use std::fmt::Write;
 
 /// Renders the particles as a `.vtp` document: points at the centres and point data
 /// `id`, `radius` (m), `species`, `free` (1 free, 0 prescribed), `velocity` (m/s),
-/// `angular_velocity` (rad/s), `force` (N). Particles are written in id order.
-pub fn particles_vtp(p: &Particles) -> String {
+/// `angular_velocity` (rad/s), `force` (N), `part` (wall part, −1 for none), plus the
+/// per-slot scalars of `extra` (name, values by slot). Particles are written in id order.
+pub fn particles_vtp(p: &Particles, extra: &[(&str, Vec<f64>)]) -> String {
     let n = p.len();
     let slot = p.slot_of();
     let order: Vec<usize> = slot.iter().map(|&s| s as usize).collect();
@@ -57,6 +58,23 @@ pub fn particles_vtp(p: &Particles) -> String {
             .iter()
             .map(|&i| u8::from(p.motion[i].is_free()).to_string()),
     );
+    scalar(
+        &mut s,
+        "part",
+        "Int32",
+        order.iter().map(|&i| match p.part.get(i) {
+            Some(&part) if part != crate::observe::NO_PART => part.to_string(),
+            _ => "-1".to_string(),
+        }),
+    );
+    for (name, values) in extra {
+        scalar(
+            &mut s,
+            name,
+            "Float64",
+            order.iter().map(|&i| format!("{:e}", values[i])),
+        );
+    }
     vector(&mut s, "velocity", order.iter().map(|&i| p.velocity[i]));
     vector(
         &mut s,
@@ -126,7 +144,7 @@ mod tests {
             );
         }
         p.permute(&[2, 0, 1]);
-        let doc = particles_vtp(&p);
+        let doc = particles_vtp(&p, &[]);
         assert!(doc.contains("NumberOfPoints=\"3\""));
         assert!(doc.contains("0e0 0e0 0e0\n1e0 0e0 0e0\n2e0 0e0 0e0\n"));
         assert!(doc.contains("5e-1 1.5e0 2.5e0"));

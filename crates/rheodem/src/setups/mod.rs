@@ -2,4 +2,5 @@
 
 pub mod compare;
 pub mod shear_box;
+pub mod split_bottom;
 pub mod sweep;
