@@ -146,7 +146,7 @@ impl Simulation {
         };
         // Give prescribed particles the velocities of their motion law.
         drift(&mut sim.particles, 0.0);
-        sim.neighbors.build(&mut sim.particles, &sim.domain)?;
+        sim.rebuild_neighbors()?;
         sim.compute_forces(true);
         Ok(sim)
     }
@@ -192,13 +192,15 @@ impl Simulation {
     }
 
     /// Rebuilds the neighbour list now; walls rotate the history of particles that crossed
-    /// a wedge face with them.
+    /// a wedge face with them and renew their lists of particles within reach.
     pub fn rebuild_neighbors(&mut self) -> Result<(), NeighborError> {
         self.neighbors.build(&mut self.particles, &self.domain)?;
-        for &(id, rotation) in self.neighbors.last_rotations() {
-            for wall in &mut self.walls {
+        let reach = self.neighbors.range + self.neighbors.skin;
+        for wall in &mut self.walls {
+            for &(id, rotation) in self.neighbors.last_rotations() {
                 wall.rotate_history(id, rotation);
             }
+            wall.find_candidates(&self.particles, reach);
         }
         Ok(())
     }

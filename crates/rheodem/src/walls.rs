@@ -78,6 +78,10 @@ pub struct Wall {
     history: Vec<ContactHistory>,
     /// Whether each particle id interacts with the wall.
     active: Vec<bool>,
+    /// Slots of the free particles within reach of the wall at the last neighbour build
+    /// (`None`: every particle is checked).
+    #[serde(skip)]
+    candidates: Option<Vec<u32>>,
 }
 
 fn no_part() -> u16 {
@@ -93,7 +97,37 @@ impl Wall {
             part: NO_PART,
             history: Vec::new(),
             active: Vec::new(),
+            candidates: None,
         }
+    }
+
+    /// Lists the free particles whose surface is within `reach` (m: the interaction range
+    /// plus the Verlet skin) of the wall, so that until the next neighbour build only they
+    /// are checked. The build criterion keeps every displacement below the skin, so no
+    /// other particle can come within the interaction range before then; particles left
+    /// out here keep no history with the wall (they are beyond its range).
+    pub fn find_candidates(&mut self, particles: &Particles, reach: f64) {
+        let list = (0..particles.len())
+            .filter(|&i| {
+                particles.motion[i].is_free()
+                    && self.shape.gap(particles.position[i]).0 - particles.radius[i] < reach
+            })
+            .map(|i| i as u32)
+            .collect::<Vec<u32>>();
+        // A particle leaving the list is beyond the wall's range: its history ends.
+        let mut listed = vec![false; self.active.len()];
+        for &i in &list {
+            if let Some(l) = listed.get_mut(particles.id[i as usize] as usize) {
+                *l = true;
+            }
+        }
+        for (id, l) in listed.iter().enumerate() {
+            if !l && self.active[id] {
+                self.active[id] = false;
+                self.history[id] = ContactHistory::default();
+            }
+        }
+        self.candidates = Some(list);
     }
 
     /// The plane through `point` (m) with `normal` (normalised here) towards the particles.
@@ -148,7 +182,16 @@ impl Wall {
             self.history.resize(ids, ContactHistory::default());
             self.active.resize(ids, false);
         }
-        for i in 0..particles.len() {
+        let all: Vec<u32>;
+        let slots = match &self.candidates {
+            Some(c) => c.as_slice(),
+            None => {
+                all = (0..particles.len() as u32).collect();
+                all.as_slice()
+            }
+        };
+        for &slot in slots {
+            let i = slot as usize;
             if !particles.motion[i].is_free() {
                 continue;
             }

@@ -19,7 +19,7 @@
 
 use crate::Simulation;
 use crate::analysis::{Estimate, block_average};
-use crate::band::{AzimuthalProfile, ErfFit, surface_height};
+use crate::band::{AzimuthalProfile, ErfFit, erf_profile, surface_height};
 use crate::contact::{Adhesion, ContactLaw, ContactTable, Damping, NormalLaw, Resistance};
 use crate::domain::Domain;
 use crate::generate::{Rng, polydisperse_radii};
@@ -28,6 +28,7 @@ use crate::io::lock::DirLock;
 use crate::io::vtk;
 use crate::neighbor::min_wedge_angle;
 use crate::particles::{Motion, Particles, Sphere};
+use crate::plot::{Labels, Markers, Series, plot_svg};
 use crate::run::{RunError, io_err, lock, read_checkpoint, write_checkpoint};
 use crate::scenario::{ScenarioError, invalid};
 use crate::timestep::shortest_contact_time;
@@ -358,6 +359,10 @@ pub struct SplitBottomRun {
     pub wall_seconds: f64,
     /// Where the settled state came from, if this run started from one.
     pub from: Option<String>,
+    /// The step this run started at (non-zero for a run from a settled state); the
+    /// throughput counts the steps since.
+    #[serde(default)]
+    pub first_step: u64,
     #[serde(skip)]
     lock: Option<Arc<DirLock>>,
 }
@@ -715,6 +720,7 @@ impl SplitBottomRun {
             snapshots: Vec::new(),
             wall_seconds: 0.0,
             from: None,
+            first_step: 0,
             lock: Some(lock),
         };
         run.write_spec(dir)?;
@@ -771,6 +777,8 @@ impl SplitBottomRun {
             lock: Some(lock),
             from: Some(settled_dir.display().to_string()),
             snapshots: Vec::new(),
+            wall_seconds: 0.0,
+            first_step: source.simulation.step,
             ..source
         };
         run.begin_shear()?;
@@ -1174,8 +1182,10 @@ impl SplitBottomRun {
             "particles": self.simulation.particles.len(),
             "free_particles": self.simulation.particles.free_count(),
             "particle_steps_per_second": if self.wall_seconds > 0.0 {
-                self.simulation.particles.len() as f64 * self.simulation.step as f64 / self.wall_seconds
+                let steps = self.simulation.step - self.first_step;
+                self.simulation.particles.len() as f64 * steps as f64 / self.wall_seconds
             } else { 0.0 },
+            "threads": rayon::current_num_threads(),
             "spec": self.spec,
             "geometry": self.geometry,
             "groups": self.spec.groups(&self.geometry, self.simulation.dt),
@@ -1186,7 +1196,109 @@ impl SplitBottomRun {
         });
         let path = dir.join("summary.json");
         let text = serde_json::to_string_pretty(&summary).unwrap_or_default();
-        write_atomic(&path, text.as_bytes()).map_err(io_err("write", &path))
+        write_atomic(&path, text.as_bytes()).map_err(io_err("write", &path))?;
+        if self.stage == Stage::Done {
+            self.write_figures(dir)?;
+        }
+        Ok(())
+    }
+
+    /// `torque.svg`: the torques against the rotation angle (Roy et al. 2016, Fig. 10);
+    /// `band.svg`: the velocity profiles with their fits.
+    fn write_figures(&self, dir: &Path) -> Result<(), RunError> {
+        let shear: Vec<&Row> = self
+            .rows
+            .iter()
+            .filter(|r| r.stage != Stage::Settle)
+            .collect();
+        let curve = |f: &dyn Fn(&Row) -> f64| -> Vec<(f64, f64)> {
+            shear.iter().map(|r| (r.angle, f(r))).collect()
+        };
+        let net = curve(&|r| r.net_torque);
+        let drive = curve(&|r| -(r.torque[OUTER_BOTTOM as usize] + r.torque[OUTER_WALL as usize]));
+        let balance = curve(&|r| r.torque.iter().sum());
+        let svg = plot_svg(
+            &Labels {
+                title: "Wall torque, full ring",
+                x: "rotation angle (rad)",
+                y: "torque (N m)",
+            },
+            &[
+                Series {
+                    label: "net (fixed − rotating parts)",
+                    points: &net,
+                },
+                Series {
+                    label: "drive (−rotating parts)",
+                    points: &drive,
+                },
+                Series {
+                    label: "balance (all parts)",
+                    points: &balance,
+                },
+            ],
+            &[],
+        )
+        .map_err(|e| RunError::Scenario(invalid("figure", "torque.svg", e)))?;
+        let path = dir.join("torque.svg");
+        write_atomic(&path, svg.as_bytes()).map_err(io_err("write", &path))?;
+
+        let results = self.results();
+        let mut measured = Vec::new();
+        let mut fitted = Vec::new();
+        for p in &self.profiles {
+            let bins = p.bins();
+            measured.push(
+                bins.iter()
+                    .filter(|b| b.count > 1)
+                    .map(|b| (b.r, b.mean, b.stderr))
+                    .collect::<Vec<_>>(),
+            );
+        }
+        for fit in &results.band {
+            let points = match &fit.fit {
+                Ok(f) => {
+                    let (lo, hi) = (self.geometry.inner_radius, self.geometry.outer_radius);
+                    (0..=100)
+                        .map(|k| {
+                            let r = lo + (hi - lo) * k as f64 / 100.0;
+                            (r, erf_profile(r, f.centre, f.width))
+                        })
+                        .collect()
+                }
+                Err(_) => Vec::new(),
+            };
+            fitted.push(points);
+        }
+        let names: Vec<String> = SLABS.iter().map(|s| format!("{s} slab, fit")).collect();
+        let series: Vec<Series<'_>> = fitted
+            .iter()
+            .zip(&names)
+            .map(|(p, n)| Series {
+                label: n,
+                points: p,
+            })
+            .collect();
+        let markers: Vec<Markers<'_>> = measured
+            .iter()
+            .zip(SLABS)
+            .map(|(p, n)| Markers {
+                label: n,
+                points: p,
+            })
+            .collect();
+        let svg = plot_svg(
+            &Labels {
+                title: "Azimuthal velocity of the grains",
+                x: "r (m)",
+                y: "v_φ / (Ω r)",
+            },
+            &series,
+            &markers,
+        )
+        .map_err(|e| RunError::Scenario(invalid("figure", "band.svg", e)))?;
+        let path = dir.join("band.svg");
+        write_atomic(&path, svg.as_bytes()).map_err(io_err("write", &path))
     }
 }
 
