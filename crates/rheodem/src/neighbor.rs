@@ -337,12 +337,16 @@ impl NeighborList {
                 let id_j = particles.id[self.partner[k] as usize];
                 let h = self.history[k];
                 let c = domain.image_turns(self.image[k]);
+                // j's image `R(cΦ) r_j` lies next to `r_i`; after the wraps `r_i → R(−t_i Φ) r_i`,
+                // `r_j → R(−t_j Φ) r_j` it is `R((c − t_i + t_j) Φ) r_j`: the key's turns are
+                // `c − t_i + t_j` (the signs of `t` were once reversed, which lost the
+                // history of every pair whose particle wrapped through a face).
                 if id_i < id_j {
-                    let key = (id_i, id_j, c + turn(id_i) - turn(id_j));
+                    let key = (id_i, id_j, c - turn(id_i) + turn(id_j));
                     map.insert(key, into_frame(h, id_i));
                 } else {
                     let seen_from_j = h.rotated_back(&images[self.image[k] as usize]).flipped();
-                    let key = (id_j, id_i, -c + turn(id_j) - turn(id_i));
+                    let key = (id_j, id_i, -c - turn(id_j) + turn(id_i));
                     map.insert(key, into_frame(seen_from_j, id_j));
                 }
             }
