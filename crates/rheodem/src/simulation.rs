@@ -206,63 +206,24 @@ impl Simulation {
     }
 
     /// Inserts spheres of the given densities (kg/m³) during a run, each in wall part
-    /// `part` (or [`crate::observe::NO_PART`]), and returns their ids. Every existing
-    /// contact keeps its springs and bridges; the new particles enter the neighbour list
-    /// and the walls at once, and their forces are evaluated (without measurement). The
-    /// particles already present keep the forces of the last step, unless they interact
-    /// with a new particle (then they take the evaluated ones); the springs of contacts
-    /// with new particles start at the next step.
+    /// `part` (or [`crate::observe::NO_PART`]), and returns their ids. Call it between
+    /// steps. Every existing contact keeps its springs and bridges, and the particles
+    /// present keep the forces of the last step (rotated with those the rebuild wraps
+    /// through a wedge face): evaluating them again would advance every spring a second
+    /// time in the same step. The new particles enter the neighbour list and the walls at
+    /// once; their forces, and the contacts they make, count from the next step (their
+    /// first half kick sees no force).
     pub fn insert(&mut self, spheres: &[(Sphere, f64, u16)]) -> Result<Vec<u32>, NeighborError> {
         let first = self.particles.len() as u32;
-        // The forces of the particles present were evaluated at this very state by the last
-        // step. Evaluating them again (as this function once did) advanced every spring by
-        // a second `v dt` and re-evaluated the dashpots at the end-of-step velocities, so an
-        // insertion, even far away, changed every contact. Keep them, by id (rotated with
-        // the particles the rebuild wraps), and keep the history as the rebuild carried it.
-        let mut kept = vec![(DVec3::ZERO, DVec3::ZERO); first as usize];
-        for (s, &id) in self.particles.id.iter().enumerate() {
-            kept[id as usize] = (self.particles.force[s], self.particles.torque[s]);
-        }
         for &(s, density, part) in spheres {
             self.particles.push_in_part(s, density, part);
         }
         self.rebuild_neighbors()?;
+        let slot = self.particles.slot_of();
         for &(id, m) in self.neighbors.last_rotations() {
-            if let Some(k) = kept.get_mut(id as usize) {
-                *k = (m * k.0, m * k.1);
-            }
-        }
-        let saved = {
-            let s = self.neighbors.slices();
-            (s.active.to_vec(), s.history.to_vec())
-        };
-        let walls = self.walls.clone();
-        self.compute_forces(false);
-        // Particles already present that interact with a new one take the evaluated forces
-        // (their contacts with the new particles included); all others keep theirs.
-        let n = self.particles.len();
-        let mut touches_new = vec![false; n];
-        {
-            let ids = &self.particles.id;
-            let s = self.neighbors.slices();
-            for i in 0..n {
-                for k in s.offsets[i] as usize..s.offsets[i + 1] as usize {
-                    let j = s.partner[k] as usize;
-                    if s.active[k] && (ids[i] >= first || ids[j] >= first) {
-                        touches_new[i] = true;
-                        touches_new[j] = true;
-                    }
-                }
-            }
-            s.active.copy_from_slice(&saved.0);
-            s.history.copy_from_slice(&saved.1);
-        }
-        self.walls = walls;
-        for (i, touches) in touches_new.into_iter().enumerate() {
-            let id = self.particles.id[i];
-            if id < first && !touches {
-                (self.particles.force[i], self.particles.torque[i]) = kept[id as usize];
-            }
+            let i = slot[id as usize] as usize;
+            self.particles.force[i] = m * self.particles.force[i];
+            self.particles.torque[i] = m * self.particles.torque[i];
         }
         Ok((first..self.particles.len() as u32).collect())
     }
