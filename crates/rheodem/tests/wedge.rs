@@ -978,7 +978,10 @@ fn insertion_keeps_every_spring_and_bridge() {
     // The inserted spheres fell freely (no contact); their first half kick saw no force
     // (`Simulation::insert`), so they lag free fall by half a step of gravity.
     let [r, v, ..] = state(&copy, n);
-    assert!(r.z > 0.024 && (v.z + 9.81 * 499.5 * copy.dt).abs() < 1e-9, "{v}");
+    assert!(
+        r.z > 0.024 && (v.z + 9.81 * 499.5 * copy.dt).abs() < 1e-9,
+        "{v}"
+    );
 }
 
 // ---------------------------------------------------------------------------------------
