@@ -68,6 +68,7 @@ pub mod sanity;
 pub mod scenario;
 pub mod setups;
 pub mod simulation;
+pub mod stage;
 pub mod stress_control;
 pub mod timestep;
 pub mod walls;

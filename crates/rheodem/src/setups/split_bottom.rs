@@ -31,6 +31,7 @@ use crate::particles::{Motion, Particles, Sphere};
 use crate::plot::{Labels, Markers, Series, plot_svg};
 use crate::run::{RunError, io_err, lock, read_checkpoint, write_checkpoint};
 use crate::scenario::{ScenarioError, invalid};
+use crate::stage::{EndCondition, Verdict};
 use crate::timestep::shortest_contact_time;
 use crate::walls::Wall;
 use glam::{DMat3, DVec3};
@@ -126,7 +127,8 @@ pub struct SplitBottomSpec {
     pub time_step: TimeStepRule,
     /// Factor on every damping coefficient while settling.
     pub settle_damping: f64,
-    /// Settling ends when the kinetic energy is below this fraction of the elastic energy.
+    /// Settling ends when the translational kinetic energy is below this fraction of the
+    /// elastic energy.
     pub settle_kinetic_ratio: f64,
     /// Settling ends at this time (s) even if the kinetic criterion is not met (reported).
     pub settle_max_time: f64,
@@ -251,6 +253,8 @@ pub struct Row {
     pub angle: f64,
     /// Kinetic energy of the free particles, translational + rotational (J).
     pub kinetic_energy: f64,
+    /// Its translational part (J).
+    pub kinetic_translational: f64,
     /// Elastic energy of the contacts (J).
     pub elastic_energy: f64,
     /// Contacts with overlap.
@@ -273,7 +277,7 @@ pub struct Row {
 pub struct SettleReport {
     /// Time at the end of settling (s).
     pub time: f64,
-    /// `E_kin / E_el` at the end.
+    /// Translational `E_kin / E_el` at the end.
     pub kinetic_ratio: f64,
     /// Whether the kinetic criterion was met (rather than the time limit).
     pub criterion_met: bool,
@@ -823,28 +827,30 @@ impl SplitBottomRun {
             match self.stage {
                 Stage::Settle => {
                     let check = ((0.005 / dt).round() as u64).max(1);
-                    let limit = (self.spec.settle_max_time / dt).round() as u64;
+                    let end = self.settle_end();
+                    let limit = end.max_steps(dt);
                     let next = self.simulation.step + 1;
                     let measure = next.is_multiple_of(check);
                     self.simulation.step(measure)?;
                     progress(Stage::Settle, next, limit);
                     if measure {
                         let row = self.row();
-                        let ratio = row.kinetic_energy / row.elastic_energy.max(f64::MIN_POSITIVE);
+                        // Translational energy only: without torsion resistance a particle
+                        // spinning about its contact normal is never slowed down, so the
+                        // rotational energy of a settled bed need not vanish.
+                        let energies = (row.kinetic_translational, row.elastic_energy);
                         self.sane()?;
                         self.rows.push(row);
-                        // At least the time of a free fall from the top of the filling.
-                        let fall = (2.0 * (self.geometry.fill_top - self.geometry.floor)
-                            / self.spec.gravity.max(1e-9))
-                        .sqrt();
-                        let met =
-                            self.simulation.time >= fall && ratio < self.spec.settle_kinetic_ratio;
-                        if met || next >= limit {
-                            self.freeze_walls(ratio, met)?;
+                        let verdict = end.verdict(next, self.simulation.time, Some(energies));
+                        if verdict != Verdict::Continue {
+                            let ratio = energies.0 / energies.1.max(f64::MIN_POSITIVE);
+                            self.freeze_walls(ratio, verdict == Verdict::Met)?;
                             self.wall_seconds += clock.elapsed().as_secs_f64();
                             clock = Instant::now();
                             write_checkpoint(&dir.join("settled.bin"), &*self)?;
                             self.begin_shear()?;
+                            self.checkpoint(dir)?;
+                        } else if next.is_multiple_of(20 * check) {
                             self.checkpoint(dir)?;
                         }
                     }
@@ -887,6 +893,19 @@ impl SplitBottomRun {
             self.write_outputs(dir)?;
         }
         Ok(())
+    }
+
+    /// The settle stage's end: the kinetic criterion, no sooner than the time of a free fall
+    /// from the top of the filling, at the latest `settle_max_time`.
+    pub fn settle_end(&self) -> EndCondition {
+        let fall = (2.0 * (self.geometry.fill_top - self.geometry.floor)
+            / self.spec.gravity.max(1e-9))
+        .sqrt();
+        EndCondition::KineticBelow {
+            ratio: self.spec.settle_kinetic_ratio,
+            min_time: fall,
+            max_time: self.spec.settle_max_time,
+        }
     }
 
     fn sane(&self) -> Result<(), RunError> {
@@ -1031,6 +1050,7 @@ impl SplitBottomRun {
             stage: self.stage,
             angle,
             kinetic_energy: o.kinetic_translational + o.kinetic_rotational,
+            kinetic_translational: o.kinetic_translational,
             elastic_energy: o.elastic_energy,
             contacts: o.contacts,
             coordination: o.coordination,
