@@ -142,6 +142,8 @@ pub struct SplitBottomSpec {
     pub snapshots: u64,
     /// Checkpoints over the shear stage (besides the final one).
     pub checkpoints: u64,
+    /// Verlet skin in units of `d_p`.
+    pub skin: f64,
     /// Random seed of the filling.
     pub seed: u64,
 }
@@ -175,6 +177,7 @@ impl Default for SplitBottomSpec {
             rows: 200,
             snapshots: 4,
             checkpoints: 8,
+            skin: 0.1,
             seed: 1,
         }
     }
@@ -254,6 +257,7 @@ pub struct Row {
     /// Kinetic energy of the free particles, translational + rotational (J).
     pub kinetic_energy: f64,
     /// Its translational part (J).
+    #[serde(default)]
     pub kinetic_translational: f64,
     /// Elastic energy of the contacts (J).
     pub elastic_energy: f64,
@@ -464,6 +468,7 @@ impl SplitBottomSpec {
         non_negative("omega", self.omega)?;
         non_negative("gravity", self.gravity)?;
         positive("settle_damping", self.settle_damping)?;
+        positive("skin", self.skin)?;
         positive("settle_kinetic_ratio", self.settle_kinetic_ratio)?;
         positive("settle_max_time", self.settle_max_time)?;
         positive("duration", self.duration)?;
@@ -700,7 +705,7 @@ impl SplitBottomRun {
             g.floor,
             g.fill_top,
         );
-        let skin = 0.1 * spec.diameter;
+        let skin = spec.skin * spec.diameter;
         let mut simulation = Simulation::new(
             particles,
             domain,
@@ -969,6 +974,7 @@ impl SplitBottomRun {
         if law.range() > sim.neighbors.range {
             sim.neighbors.range = law.range();
         }
+        sim.neighbors.skin = self.spec.skin * self.spec.diameter;
         for i in 0..sim.particles.len() {
             let part = sim.particles.part[i];
             if part == OUTER_BOTTOM || part == OUTER_WALL {
