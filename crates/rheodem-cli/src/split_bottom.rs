@@ -10,6 +10,7 @@ use std::path::{Path, PathBuf};
 
 /// Arguments of `split-bottom`: every option overrides the same key of `--config`.
 #[derive(Args)]
+#[command(allow_negative_numbers = true)]
 pub struct SplitBottomArgs {
     /// A TOML file with the cell's keys (see docs/split-bottom.md); options override it.
     #[arg(long)]
