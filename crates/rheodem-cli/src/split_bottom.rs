@@ -12,7 +12,8 @@ use std::path::{Path, PathBuf};
 #[derive(Args)]
 #[command(allow_negative_numbers = true)]
 pub struct SplitBottomArgs {
-    /// A TOML file with the cell's keys (see docs/split-bottom.md); options override it.
+    /// A TOML file with the cell's keys (those of a run's split-bottom.toml; docs/model.md §10);
+    /// options override it.
     #[arg(long)]
     config: Option<PathBuf>,
     /// Angular velocity Ω of the outer parts (rad/s).
