@@ -673,10 +673,27 @@ impl SplitBottomRun {
         force: bool,
     ) -> Result<SplitBottomRun, RunError> {
         let geometry = spec.geometry()?;
+        let existed = dir.exists();
         let lock = lock(dir)?;
         if dir.join("checkpoint.bin").exists() && !force {
             return Err(RunError::Exists(dir.to_path_buf()));
         }
+        match SplitBottomRun::fill_cell(spec, geometry, lock, dir) {
+            Err(e) if !existed => {
+                let _ = std::fs::remove_dir_all(dir);
+                Err(e)
+            }
+            other => other,
+        }
+    }
+
+    /// The filled cell of [`SplitBottomRun::start`] in the locked directory `dir`.
+    fn fill_cell(
+        spec: SplitBottomSpec,
+        geometry: Geometry,
+        lock: Arc<DirLock>,
+        dir: &Path,
+    ) -> Result<SplitBottomRun, RunError> {
         let mut rng = Rng::seed_from_u64(spec.seed);
         let radii = polydisperse_radii(&mut rng, geometry.count, spec.diameter, spec.w);
         let centres = fill(&mut rng, &radii, &geometry)?;
@@ -775,6 +792,16 @@ impl SplitBottomRun {
             ("seed", s.seed as f64, o.seed as f64),
         ] {
             same(key, a, b)?;
+        }
+        if s.time_step != o.time_step {
+            return Err(RunError::Scenario(invalid(
+                "time_step",
+                format!("{:?}", s.time_step),
+                format!(
+                    "must equal the settled run's rule ({:?}): its time step is kept",
+                    o.time_step
+                ),
+            )));
         }
         let lock = lock(dir)?;
         if dir.join("checkpoint.bin").exists() && !force {
