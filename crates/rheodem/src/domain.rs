@@ -1,10 +1,19 @@
-//! The simulation box: its extent, which axes are periodic, and the periodic images.
+//! The simulation region and its boundaries: a box with periodic and Lees-Edwards axes, or
+//! an angular-periodic wedge (docs/model.md §4.2–4.6).
+//!
+//! Every boundary answers the same questions, and the rest of the engine asks only these:
+//! the current [`ImageTransform`] of every image code (translation and rotation, with the
+//! velocity jump of Lees-Edwards images), [`Domain::rotated_images`] (the images the
+//! neighbour search must query besides the translations of the periodic axes),
+//! [`Domain::wrap`] of position, velocity *and* spin (returning the map applied, so that
+//! contact history and prescribed motions follow it), [`Domain::volume`] and
+//! [`Domain::mean_flow`].
 //!
 //! A pair that interacts across a periodic boundary is stored in the neighbour list with an
 //! *image code*: which copy of the second particle it sees. The code is fixed between list
-//! builds while the geometric transformation it stands for may change every step (a box that
-//! is compressed now; a Lees-Edwards shift or a rotated wedge image later). The force loop
-//! asks the domain for the current [`ImageTransform`] of every code once per step.
+//! builds while the geometric transformation it stands for may change every step (a box
+//! that is compressed, a Lees-Edwards shift). The force loop asks the domain for the
+//! current transform of every code once per step.
 
 use glam::{DMat3, DVec3};
 use serde::{Deserialize, Serialize};

@@ -371,8 +371,6 @@ impl NeighborList {
         let free: Vec<bool> = particles.motion.iter().map(|m| m.is_free()).collect();
         let reach = self.range + self.skin;
         let cutoff = grid.cutoff;
-        let lengths = grid.lengths;
-        let le_shift = grid.shear_shift;
         let rotated = domain.rotated_images();
         let images = domain.image_transforms();
         let wedge = domain.wedge;
@@ -385,12 +383,9 @@ impl NeighborList {
                         let Some((cell, img)) = grid.neighbor(pos[i], ci, [dx, dy, dz]) else {
                             continue;
                         };
-                        let shift = DVec3::new(
-                            img[0] as f64 * lengths.x + img[1] as f64 * le_shift,
-                            img[1] as f64 * lengths.y,
-                            img[2] as f64 * lengths.z,
-                        );
+                        // The domain's transform of this image (a translation here).
                         let code = image_code(img);
+                        let shift = images[code as usize].shift;
                         let (lo, hi) = (start[cell] as usize, start[cell + 1] as usize);
                         for j in lo.max(i + 1)..hi.max(i + 1) {
                             if !free[i] && !free[j] {
