@@ -15,3 +15,6 @@ for g in 0.01 0.02 0.04; do
   run wet-gamma$g --omega 0.5 --law willett --surface-tension $g --volume-nl 75 --from "$V/dry-omega0.5"
 done
 run dry-wedge60-omega0.5 --omega 0.5 --wedge-deg 60
+# Ω = 0.25 over the same rotation angles as Ω = 0.5 (twice the time).
+common=(--duration 5.0 --average-from 2.0 --time-step mean-pair --quiet)
+run dry-omega0.25-long --omega 0.25 --from "$V/dry-omega0.5"
