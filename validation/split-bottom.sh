@@ -18,3 +18,6 @@ run dry-wedge60-omega0.5 --omega 0.5 --wedge-deg 60
 # Ω = 0.25 over the same rotation angles as Ω = 0.5 (twice the time).
 common=(--duration 5.0 --average-from 2.0 --time-step mean-pair --quiet)
 run dry-omega0.25-long --omega 0.25 --from "$V/dry-omega0.5"
+# Ω = 0.125 over the same rotation angles (four times the time).
+common=(--duration 10.0 --average-from 4.0 --time-step mean-pair --quiet)
+run dry-omega0.125 --omega 0.125 --from "$V/dry-omega0.5"
