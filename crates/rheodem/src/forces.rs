@@ -13,7 +13,9 @@
 //! into its own frame, `−Rᵀ f` and `Rᵀ τ_j`. What is measured besides the forces is up to
 //! the [`ContactObserver`] of the call.
 
-use crate::contact::{ContactHistory, ContactTable, PairKinematics};
+use crate::contact::kernel::{Springs, Touch};
+use crate::contact::lanes::{F4, Real};
+use crate::contact::{ContactHistory, ContactTable, PairForce, PairKernel, PairKinematics};
 use crate::domain::{IDENTITY_IMAGE, IMAGE_COUNT, ImageTransform};
 use crate::neighbor::NeighborList;
 use crate::observe::{ContactObserver, ContactView};
@@ -26,6 +28,7 @@ use rayon::prelude::*;
 pub struct ForceScratch {
     force: Vec<Vec<DVec3>>,
     torque: Vec<Vec<DVec3>>,
+    touching: Vec<Vec<Touching>>,
 }
 
 /// Read-only particle data of the loop.
@@ -87,6 +90,7 @@ pub fn pair_forces<O: ContactObserver>(
 
     scratch.force.resize_with(chunks - 1, Vec::new);
     scratch.torque.resize_with(chunks - 1, Vec::new);
+    scratch.touching.resize_with(chunks, Vec::new);
     for buf in scratch.force.iter_mut().chain(scratch.torque.iter_mut()) {
         buf.clear();
         buf.resize(n, DVec3::ZERO);
@@ -111,11 +115,12 @@ pub fn pair_forces<O: ContactObserver>(
         };
         jobs.push((lo..hi, t_here, h_here, f, t));
     }
+    let jobs: Vec<_> = jobs.into_iter().zip(scratch.touching.iter_mut()).collect();
 
     let partial: Vec<O> = jobs
         .into_par_iter()
-        .map(|(range, active, history, force, torque)| {
-            chunk_forces::<O>(&inputs, range, active, history, force, torque)
+        .map(|((range, active, history, force, torque), touching)| {
+            chunk_forces::<O>(&inputs, range, active, history, force, torque, touching)
         })
         .collect();
 
@@ -143,8 +148,27 @@ pub fn pair_forces<O: ContactObserver>(
     total
 }
 
-/// Forces of the pairs whose first slot lies in `range`.
-#[inline(never)]
+/// A touching pair found by the first pass of [`chunk_forces`].
+#[derive(Clone, Copy, Debug, Default)]
+pub(crate) struct Touching {
+    /// The pair's index in the chunk's slice of the list.
+    local: u32,
+    /// Slots of `i` and `j`.
+    i: u32,
+    j: u32,
+    /// Image code of `j`.
+    code: u8,
+    /// `r_i − r_j` through the image (m).
+    branch: DVec3,
+    /// `|r_i − r_j|` (m).
+    dist: f64,
+}
+
+/// Forces of the pairs whose first slot lies in `range`, in two passes: the list is
+/// scanned for pairs within reach (pairs apart that still attract are evaluated on the
+/// spot, the touching ones are written compactly into `touching`), then the contact law
+/// runs over the touching pairs four at a time. On x86-64 CPUs with AVX2 the same code is
+/// compiled a second time for them and chosen at run time; both give the same bits.
 fn chunk_forces<O: ContactObserver>(
     inp: &Inputs<'_>,
     range: std::ops::Range<usize>,
@@ -152,22 +176,58 @@ fn chunk_forces<O: ContactObserver>(
     history: &mut [ContactHistory],
     force: &mut [DVec3],
     torque: &mut [DVec3],
+    touching: &mut Vec<Touching>,
+) -> O {
+    #[cfg(target_arch = "x86_64")]
+    if std::arch::is_x86_feature_detected!("avx2") {
+        // SAFETY: the CPU supports AVX2, checked just above.
+        return unsafe {
+            chunk_forces_avx2::<O>(inp, range, active, history, force, torque, touching)
+        };
+    }
+    chunk_forces_generic::<O>(inp, range, active, history, force, torque, touching)
+}
+
+/// [`chunk_forces_generic`] compiled with AVX2.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+fn chunk_forces_avx2<O: ContactObserver>(
+    inp: &Inputs<'_>,
+    range: std::ops::Range<usize>,
+    active: &mut [bool],
+    history: &mut [ContactHistory],
+    force: &mut [DVec3],
+    torque: &mut [DVec3],
+    touching: &mut Vec<Touching>,
+) -> O {
+    chunk_forces_generic::<O>(inp, range, active, history, force, torque, touching)
+}
+
+#[inline(always)]
+fn chunk_forces_generic<O: ContactObserver>(
+    inp: &Inputs<'_>,
+    range: std::ops::Range<usize>,
+    active: &mut [bool],
+    history: &mut [ContactHistory],
+    force: &mut [DVec3],
+    torque: &mut [DVec3],
+    touching: &mut Vec<Touching>,
 ) -> O {
     let mut obs = O::default();
     let base = inp.offsets[range.start] as usize;
+    // Pass 1: the touching pairs go into `touching`; pairs apart within the interaction
+    // range are evaluated on the spot.
+    touching.clear();
     for i in range {
         let r_i = inp.position[i];
         let a_i = inp.radius[i];
-        let mut f_i = DVec3::ZERO;
-        let mut t_i = DVec3::ZERO;
         for k in inp.offsets[i] as usize..inp.offsets[i + 1] as usize {
             let j = inp.partner[k] as usize;
             let code = inp.image[k];
-            let image = &inp.images[code as usize];
             let r_j = if code == IDENTITY_IMAGE {
                 inp.position[j]
             } else {
-                image.position(inp.position[j])
+                inp.images[code as usize].position(inp.position[j])
             };
             let branch = r_i - r_j;
             let d2 = branch.length_squared();
@@ -182,58 +242,252 @@ fn chunk_forces<O: ContactObserver>(
                 continue;
             }
             let dist = d2.sqrt();
-            let inv_dist = 1.0 / dist;
-            let (v_j, w_j) = if code == IDENTITY_IMAGE {
-                (inp.velocity[j], inp.omega[j])
-            } else {
-                (
-                    image.velocity(inp.velocity[j]),
-                    image.angular_velocity(inp.omega[j]),
-                )
-            };
-            let kin = PairKinematics {
-                normal: branch * inv_dist,
-                overlap: sum - dist,
-                radius_i: a_i,
-                radius_j: inp.radius[j],
-                velocity: inp.velocity[i] - v_j - DVec3::new(inp.flow_rate * branch.y, 0.0, 0.0),
-                omega_i: inp.omega[i],
-                omega_j: w_j,
-                reduced_mass: 1.0 / (inp.inv_mass[i] + inp.inv_mass[j]),
-            };
-            let law = inp.laws.get(inp.species[i], inp.species[j]);
-            let h = &mut history[local];
-            let Some(pf) = law.interact(&kin, h, inp.dt) else {
-                active[local] = false;
-                continue;
-            };
-            active[local] = true;
-            f_i += pf.force;
-            t_i += pf.torque_i;
-            if image.rotation.is_none() {
-                force[j] -= pf.force;
-                torque[j] += pf.torque_j;
-            } else {
-                force[j] -= image.vector_back(pf.force);
-                torque[j] += image.vector_back(pf.torque_j);
-            }
-            if O::OBSERVES {
-                obs.visit(&ContactView {
-                    ids: [inp.id[i], inp.id[j]],
-                    parts: [inp.part[i], inp.part[j]],
-                    wall: None,
-                    image,
-                    position: r_i,
+            if sum - dist >= 0.0 {
+                touching.push(Touching {
+                    local: local as u32,
+                    i: i as u32,
+                    j: j as u32,
+                    code,
                     branch,
-                    kinematics: &kin,
-                    force: &pf,
-                    law,
-                    history: h,
+                    dist,
                 });
+            } else {
+                let (h, a) = (&mut history[local], &mut active[local]);
+                apart_pair::<O>(inp, i, j, code, branch, dist, h, a, force, torque, &mut obs);
             }
         }
-        force[i] += f_i;
-        torque[i] += t_i;
+    }
+    // Pass 2: the contact law over the touching pairs, four at a time.
+    let uniform = inp.laws.species() == 1;
+    for batch in touching.chunks(LANES) {
+        if uniform
+            || batch
+                .iter()
+                .all(|c| inp.kernel_of(c) == inp.kernel_of(&batch[0]))
+        {
+            touch_batch::<O>(
+                inp,
+                inp.kernel_of(&batch[0]),
+                batch,
+                active,
+                history,
+                force,
+                torque,
+                &mut obs,
+            );
+        } else {
+            for c in batch {
+                touch_batch::<O>(
+                    inp,
+                    inp.kernel_of(c),
+                    std::slice::from_ref(c),
+                    active,
+                    history,
+                    force,
+                    torque,
+                    &mut obs,
+                );
+            }
+        }
     }
     obs
+}
+
+/// Contacts per lane group of the law.
+const LANES: usize = 4;
+
+impl Inputs<'_> {
+    /// The kernel of a pair.
+    #[inline(always)]
+    fn kernel_of(&self, c: &Touching) -> &PairKernel {
+        self.laws
+            .kernel(self.species[c.i as usize], self.species[c.j as usize])
+    }
+
+    /// Velocity and angular velocity of `j` seen through image `code`.
+    #[inline(always)]
+    fn partner_motion(&self, j: usize, code: u8) -> (DVec3, DVec3) {
+        if code == IDENTITY_IMAGE {
+            (self.velocity[j], self.omega[j])
+        } else {
+            let image = &self.images[code as usize];
+            (
+                image.velocity(self.velocity[j]),
+                image.angular_velocity(self.omega[j]),
+            )
+        }
+    }
+
+    /// The kinematics of a pair at distance `dist` (m; `overlap` of either sign).
+    #[inline(always)]
+    fn kinematics(&self, i: usize, j: usize, code: u8, branch: DVec3, dist: f64) -> PairKinematics {
+        let (v_j, w_j) = self.partner_motion(j, code);
+        PairKinematics {
+            normal: branch * (1.0 / dist),
+            overlap: self.radius[i] + self.radius[j] - dist,
+            radius_i: self.radius[i],
+            radius_j: self.radius[j],
+            velocity: self.velocity[i] - v_j - DVec3::new(self.flow_rate * branch.y, 0.0, 0.0),
+            omega_i: self.omega[i],
+            omega_j: w_j,
+            reduced_mass: 1.0 / (self.inv_mass[i] + self.inv_mass[j]),
+        }
+    }
+}
+
+/// Adds the forces of `pf` on `i` and (through the image) on `j`.
+#[inline(always)]
+fn add_pair(
+    force: &mut [DVec3],
+    torque: &mut [DVec3],
+    image: &ImageTransform,
+    i: usize,
+    j: usize,
+    pf: &PairForce,
+) {
+    force[i] += pf.force;
+    torque[i] += pf.torque_i;
+    if image.rotation.is_none() {
+        force[j] -= pf.force;
+        torque[j] += pf.torque_j;
+    } else {
+        force[j] -= image.vector_back(pf.force);
+        torque[j] += image.vector_back(pf.torque_j);
+    }
+}
+
+/// A pair apart within the interaction range (adhesive laws), evaluated alone.
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+fn apart_pair<O: ContactObserver>(
+    inp: &Inputs<'_>,
+    i: usize,
+    j: usize,
+    code: u8,
+    branch: DVec3,
+    dist: f64,
+    h: &mut ContactHistory,
+    active: &mut bool,
+    force: &mut [DVec3],
+    torque: &mut [DVec3],
+    obs: &mut O,
+) {
+    let kin = inp.kinematics(i, j, code, branch, dist);
+    let (s_i, s_j) = (inp.species[i], inp.species[j]);
+    let Some(pf) = inp.laws.kernel(s_i, s_j).apart(&kin, h) else {
+        *active = false;
+        return;
+    };
+    *active = true;
+    let image = &inp.images[code as usize];
+    add_pair(force, torque, image, i, j, &pf);
+    if O::OBSERVES {
+        obs.visit(&ContactView {
+            ids: [inp.id[i], inp.id[j]],
+            parts: [inp.part[i], inp.part[j]],
+            wall: None,
+            image,
+            position: inp.position[i],
+            branch,
+            kinematics: &kin,
+            force: &pf,
+            law: inp.laws.get(s_i, s_j),
+            history: h,
+        });
+    }
+}
+
+/// Up to [`LANES`] touching pairs with the same kernel, evaluated in one lane group (the
+/// lanes past `batch.len()` repeat the first pair and are discarded).
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+fn touch_batch<O: ContactObserver>(
+    inp: &Inputs<'_>,
+    kernel: &PairKernel,
+    batch: &[Touching],
+    active: &mut [bool],
+    history: &mut [ContactHistory],
+    force: &mut [DVec3],
+    torque: &mut [DVec3],
+    obs: &mut O,
+) {
+    let mut pair = Touch::<F4>::default();
+    let mut springs = Springs::<F4>::default();
+    let (mut dist, mut sum, mut inv_mass) = (F4::default(), F4::default(), F4::default());
+    let rotation = kernel.resists_rotation();
+    for l in 0..LANES {
+        let c = batch.get(l).unwrap_or(&batch[0]);
+        let (i, j) = (c.i as usize, c.j as usize);
+        let (v_j, w_j) = inp.partner_motion(j, c.code);
+        pair.normal.set_lane(l, c.branch);
+        dist.0[l] = c.dist;
+        pair.radius_i.0[l] = inp.radius[i];
+        pair.radius_j.0[l] = inp.radius[j];
+        sum.0[l] = inp.radius[i] + inp.radius[j];
+        pair.velocity.set_lane(
+            l,
+            inp.velocity[i] - v_j - DVec3::new(inp.flow_rate * c.branch.y, 0.0, 0.0),
+        );
+        pair.omega_i.set_lane(l, inp.omega[i]);
+        pair.omega_j.set_lane(l, w_j);
+        inv_mass.0[l] = inp.inv_mass[i] + inp.inv_mass[j];
+        let h = &history[c.local as usize];
+        springs.tangential.set_lane(l, h.tangential);
+        if rotation {
+            springs.rolling.set_lane(l, h.rolling);
+            springs.torsion.set_lane(l, h.torsion);
+        }
+    }
+    let one = F4::splat(1.0);
+    pair.normal = pair.normal.scale(one / dist);
+    pair.overlap = sum - dist;
+    pair.reduced_mass = one / inv_mass;
+    let f = kernel.touching_lanes::<F4, false>(&pair, &mut springs, inp.dt);
+    for (l, c) in batch.iter().enumerate() {
+        let (i, j, local) = (c.i as usize, c.j as usize, c.local as usize);
+        let h = &mut history[local];
+        h.tangential = springs.tangential.lane(l);
+        if rotation {
+            h.rolling = springs.rolling.lane(l);
+            h.torsion = springs.torsion.lane(l);
+        }
+        if kernel.needs_bridge() {
+            h.bridge = true;
+        }
+        active[local] = true;
+        let pf = PairForce {
+            force: f.force.lane(l),
+            torque_i: f.torque_i.lane(l),
+            torque_j: f.torque_j.lane(l),
+            repulsive: f.repulsive.0[l],
+            adhesive: f.adhesive.0[l],
+            sliding: f.sliding[l],
+        };
+        let image = &inp.images[c.code as usize];
+        add_pair(force, torque, image, i, j, &pf);
+        if O::OBSERVES {
+            let kin = PairKinematics {
+                normal: pair.normal.lane(l),
+                overlap: pair.overlap.0[l],
+                radius_i: pair.radius_i.0[l],
+                radius_j: pair.radius_j.0[l],
+                velocity: pair.velocity.lane(l),
+                omega_i: pair.omega_i.lane(l),
+                omega_j: pair.omega_j.lane(l),
+                reduced_mass: pair.reduced_mass.0[l],
+            };
+            obs.visit(&ContactView {
+                ids: [inp.id[i], inp.id[j]],
+                parts: [inp.part[i], inp.part[j]],
+                wall: None,
+                image,
+                position: inp.position[i],
+                branch: c.branch,
+                kinematics: &kin,
+                force: &pf,
+                law: inp.laws.get(inp.species[i], inp.species[j]),
+                history: h,
+            });
+        }
+    }
 }

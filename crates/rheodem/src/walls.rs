@@ -199,8 +199,8 @@ impl Wall {
             let a = particles.radius[i];
             let (gap, normal) = self.shape.gap(particles.position[i]);
             let overlap = a - gap;
-            let law = laws.get(particles.species[i], self.species);
-            if overlap <= -law.range() {
+            let kernel = laws.kernel(particles.species[i], self.species);
+            if overlap <= -kernel.range() {
                 if self.active[id] {
                     self.active[id] = false;
                     self.history[id] = ContactHistory::default();
@@ -218,7 +218,7 @@ impl Wall {
                 reduced_mass: particles.mass[i],
             };
             let h = &mut self.history[id];
-            let Some(f) = law.interact(&k, h, dt) else {
+            let Some(f) = kernel.interact(&k, h, dt) else {
                 self.active[id] = false;
                 continue;
             };
@@ -235,7 +235,7 @@ impl Wall {
                     branch: normal * gap,
                     kinematics: &k,
                     force: &f,
-                    law,
+                    law: laws.get(particles.species[i], self.species),
                     history: h,
                 });
             }

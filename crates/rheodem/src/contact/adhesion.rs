@@ -13,6 +13,7 @@
 //! - [`Adhesion::LinearIrreversible`]: the bridge's loading path with a linear separation
 //!   branch `−(f_max − k_c S)`, rupture at `S_c = f_max / k_c`.
 
+use super::lanes::Real;
 use serde::{Deserialize, Serialize};
 use std::f64::consts::PI;
 
@@ -132,59 +133,51 @@ impl Adhesion {
     }
 
     /// Maximum adhesive force `f_a^max` (N) of a pair of radii `a_i`, `a_j` (m).
-    #[inline]
     pub fn max_force(&self, a_i: f64, a_j: f64) -> f64 {
-        match *self {
-            Adhesion::None => 0.0,
-            Adhesion::Reversible { max_force, .. }
-            | Adhesion::LinearIrreversible { max_force, .. } => max_force,
-            Adhesion::LiquidBridge {
-                surface_tension,
-                contact_angle,
-                ..
-            } => 2.0 * PI * bridge_radius(a_i, a_j) * surface_tension * contact_angle.cos(),
-        }
+        self.resolve().max_force(a_i, a_j)
     }
 
     /// Adhesive force (N, ≤ 0) of a pair in contact (`δ ≥ 0`): `−f_a^max` for every law.
-    /// Irreversible laws form their bridge here.
-    #[inline]
     pub fn contact_force(&self, a_i: f64, a_j: f64) -> f64 {
         -self.max_force(a_i, a_j)
     }
 
     /// Adhesive force (N, ≤ 0) of a pair separated by `s > 0` (m), and whether the
     /// bridge survives. `bridge` says whether an irreversible law's bridge exists.
-    #[inline]
     pub fn separated_force(&self, s: f64, a_i: f64, a_j: f64, bridge: bool) -> (f64, bool) {
+        self.resolve().separated_force(s, a_i, a_j, bridge)
+    }
+
+    /// The law with its per-run constants computed (`2π γ_s cos θ`, the range, `1/V_b`),
+    /// as the pair loop uses it.
+    pub fn resolve(&self) -> ResolvedAdhesion {
+        let range = self.range();
         match *self {
-            Adhesion::None => (0.0, false),
+            Adhesion::None => ResolvedAdhesion::None,
             Adhesion::Reversible {
                 max_force,
                 stiffness,
-            } => {
-                let f = stiffness * s - max_force;
-                (f.min(0.0), false)
-            }
+            } => ResolvedAdhesion::Reversible {
+                max_force,
+                stiffness,
+            },
             Adhesion::LinearIrreversible {
                 max_force,
                 stiffness,
-            } => {
-                if bridge && s <= max_force / stiffness {
-                    (stiffness * s - max_force, true)
-                } else {
-                    (0.0, false)
-                }
-            }
-            Adhesion::LiquidBridge { volume, .. } => {
-                if bridge && s <= self.range() {
-                    let r = bridge_radius(a_i, a_j);
-                    let f = -self.max_force(a_i, a_j) * willett_factor(s * (r / volume).sqrt());
-                    (f, true)
-                } else {
-                    (0.0, false)
-                }
-            }
+            } => ResolvedAdhesion::LinearIrreversible {
+                max_force,
+                stiffness,
+                range,
+            },
+            Adhesion::LiquidBridge {
+                surface_tension,
+                contact_angle,
+                volume,
+            } => ResolvedAdhesion::LiquidBridge {
+                force_per_radius: 2.0 * PI * surface_tension * contact_angle.cos(),
+                range,
+                inv_volume: 1.0 / volume,
+            },
         }
     }
 
@@ -221,6 +214,147 @@ impl Adhesion {
             self.separation_energy(0.0, a_i, a_j) - self.max_force(a_i, a_j) * overlap
         } else {
             self.separation_energy(-overlap, a_i, a_j)
+        }
+    }
+}
+
+/// An [`Adhesion`] law with its per-run constants computed (see [`Adhesion::resolve`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum ResolvedAdhesion {
+    /// No adhesion.
+    None,
+    /// Reversible: `−f_max + k_c S` up to `S = f_max / k_c`.
+    Reversible {
+        /// `f_max` (N).
+        max_force: f64,
+        /// `k_c` (N/m).
+        stiffness: f64,
+    },
+    /// Willett's bridge: `f_max = 2π r γ_s cos θ`, rupture at `S_c`.
+    LiquidBridge {
+        /// `2π γ_s cos θ` (N/m): `f_max` per unit pair radius `r`.
+        force_per_radius: f64,
+        /// Rupture distance `S_c = (1 + θ/2) V_b^{1/3}` (m).
+        range: f64,
+        /// `1 / V_b` (1/m³).
+        inv_volume: f64,
+    },
+    /// The linear irreversible law: `−f_max + k_c S` up to rupture at `S_c = f_max / k_c`.
+    LinearIrreversible {
+        /// `f_max` (N).
+        max_force: f64,
+        /// `k_c` (N/m).
+        stiffness: f64,
+        /// `S_c` (m).
+        range: f64,
+    },
+}
+
+impl ResolvedAdhesion {
+    /// Whether there is no adhesion.
+    #[inline(always)]
+    pub fn is_none(&self) -> bool {
+        matches!(self, ResolvedAdhesion::None)
+    }
+
+    /// Whether a bridge forms at contact (irreversible laws).
+    #[inline(always)]
+    pub fn needs_bridge(&self) -> bool {
+        matches!(
+            self,
+            ResolvedAdhesion::LiquidBridge { .. } | ResolvedAdhesion::LinearIrreversible { .. }
+        )
+    }
+
+    /// Range of the attraction beyond contact (m).
+    #[inline(always)]
+    pub fn range(&self) -> f64 {
+        match *self {
+            ResolvedAdhesion::None => 0.0,
+            ResolvedAdhesion::Reversible {
+                max_force,
+                stiffness,
+            } => max_force / stiffness,
+            ResolvedAdhesion::LiquidBridge { range, .. }
+            | ResolvedAdhesion::LinearIrreversible { range, .. } => range,
+        }
+    }
+
+    /// `f_a^max` (N) of a pair of radii `a_i`, `a_j` (m).
+    #[inline(always)]
+    pub fn max_force(&self, a_i: f64, a_j: f64) -> f64 {
+        match *self {
+            ResolvedAdhesion::None => 0.0,
+            ResolvedAdhesion::Reversible { max_force, .. }
+            | ResolvedAdhesion::LinearIrreversible { max_force, .. } => max_force,
+            ResolvedAdhesion::LiquidBridge {
+                force_per_radius, ..
+            } => force_per_radius * bridge_radius(a_i, a_j),
+        }
+    }
+
+    /// Adhesive force (N, ≤ 0) in contact: `−f_a^max`.
+    #[inline(always)]
+    pub fn contact_force(&self, a_i: f64, a_j: f64) -> f64 {
+        -self.max_force(a_i, a_j)
+    }
+
+    /// [`ResolvedAdhesion::contact_force`] in lanes, for two spheres or (`WALL`) a sphere
+    /// on a wall (`a_j` unused).
+    #[inline(always)]
+    pub fn contact_force_lanes<R: Real, const WALL: bool>(&self, a_i: R, a_j: R) -> R {
+        match *self {
+            ResolvedAdhesion::None => R::splat(0.0),
+            ResolvedAdhesion::Reversible { max_force, .. }
+            | ResolvedAdhesion::LinearIrreversible { max_force, .. } => R::splat(-max_force),
+            ResolvedAdhesion::LiquidBridge {
+                force_per_radius, ..
+            } => {
+                let two = R::splat(2.0);
+                let r = if WALL {
+                    two * a_i
+                } else {
+                    two * a_i * a_j / (a_i + a_j)
+                };
+                -(R::splat(force_per_radius) * r)
+            }
+        }
+    }
+
+    /// Adhesive force (N, ≤ 0) at separation `s > 0` (m), and whether the bridge survives;
+    /// `bridge` says whether an irreversible law's bridge exists.
+    #[inline(always)]
+    pub fn separated_force(&self, s: f64, a_i: f64, a_j: f64, bridge: bool) -> (f64, bool) {
+        match *self {
+            ResolvedAdhesion::None => (0.0, false),
+            ResolvedAdhesion::Reversible {
+                max_force,
+                stiffness,
+            } => ((stiffness * s - max_force).min(0.0), false),
+            ResolvedAdhesion::LinearIrreversible {
+                max_force,
+                stiffness,
+                range,
+            } => {
+                if bridge && s <= range {
+                    (stiffness * s - max_force, true)
+                } else {
+                    (0.0, false)
+                }
+            }
+            ResolvedAdhesion::LiquidBridge {
+                force_per_radius,
+                range,
+                inv_volume,
+            } => {
+                if bridge && s <= range {
+                    let r = bridge_radius(a_i, a_j);
+                    let f = -(force_per_radius * r) * willett_factor(s * (r * inv_volume).sqrt());
+                    (f, true)
+                } else {
+                    (0.0, false)
+                }
+            }
         }
     }
 }

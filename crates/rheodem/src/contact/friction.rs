@@ -1,6 +1,7 @@
 //! Spring–dashpot–Coulomb resistance with history (docs/model.md §2.3), shared by sliding
 //! friction, rolling resistance and torsion resistance.
 
+use super::lanes::{Real, V3};
 use super::normal::Damping;
 use glam::DVec3;
 use serde::{Deserialize, Serialize};
@@ -52,8 +53,10 @@ impl Resistance {
         f_rep: f64,
         dt: f64,
     ) -> (DVec3, bool) {
-        rotate_into_plane(xi, n);
-        self.stretch_and_cap(xi, v, gamma, f_rep, dt)
+        let mut x = V3::from_glam(*xi);
+        let (f, slip) = self.in_plane(&mut x, V3::from_glam(n), V3::from_glam(v), gamma, f_rep, dt);
+        *xi = x.to_glam();
+        (f.to_glam(), slip)
     }
 
     /// Like [`Resistance::update_in_plane`] for a spring that lives along the normal `n`
@@ -69,38 +72,70 @@ impl Resistance {
         f_rep: f64,
         dt: f64,
     ) -> (DVec3, bool) {
-        let len = xi.length();
-        *xi = if n.dot(*xi) < 0.0 { -len * n } else { len * n };
+        let mut x = V3::from_glam(*xi);
+        let (f, slip) =
+            self.along_normal(&mut x, V3::from_glam(n), V3::from_glam(v), gamma, f_rep, dt);
+        *xi = x.to_glam();
+        (f.to_glam(), slip)
+    }
+
+    /// [`Resistance::update_in_plane`] in lanes.
+    #[inline(always)]
+    pub fn in_plane<R: Real>(
+        &self,
+        xi: &mut V3<R>,
+        n: V3<R>,
+        v: V3<R>,
+        gamma: R,
+        f_rep: R,
+        dt: f64,
+    ) -> (V3<R>, R::Mask) {
+        rotate_into_plane(xi, n);
+        self.stretch_and_cap(xi, v, gamma, f_rep, dt)
+    }
+
+    /// [`Resistance::update_along_normal`] in lanes.
+    #[inline(always)]
+    pub fn along_normal<R: Real>(
+        &self,
+        xi: &mut V3<R>,
+        n: V3<R>,
+        v: V3<R>,
+        gamma: R,
+        f_rep: R,
+        dt: f64,
+    ) -> (V3<R>, R::Mask) {
+        let len = xi.dot(*xi).sqrt();
+        let zero = R::splat(0.0);
+        *xi = V3::select(n.dot(*xi).lt(zero), n.scale(-len), n.scale(len));
         self.stretch_and_cap(xi, v, gamma, f_rep, dt)
     }
 
     /// Stretches the spring by `v dt`, forms the trial force `−k ξ − γ v` and caps it at
     /// `μ_s f_rep`: a slipping contact carries `μ_d f_rep` along the trial direction and its
     /// spring is reset to match, `ξ = −(f + γ v)/k`.
-    #[inline]
-    fn stretch_and_cap(
+    #[inline(always)]
+    fn stretch_and_cap<R: Real>(
         &self,
-        xi: &mut DVec3,
-        v: DVec3,
-        gamma: f64,
-        f_rep: f64,
+        xi: &mut V3<R>,
+        v: V3<R>,
+        gamma: R,
+        f_rep: R,
         dt: f64,
-    ) -> (DVec3, bool) {
-        *xi += v * dt;
-        let trial = -self.stiffness * *xi - gamma * v;
-        let limit = self.mu_static * f_rep;
-        let t2 = trial.length_squared();
-        if t2 > limit * limit {
-            let force = trial * (self.mu_dynamic * f_rep / t2.sqrt());
-            *xi = if self.stiffness > 0.0 {
-                (force + gamma * v) * (-1.0 / self.stiffness)
-            } else {
-                DVec3::ZERO
-            };
-            (force, true)
+    ) -> (V3<R>, R::Mask) {
+        *xi = *xi + v.scale(R::splat(dt));
+        let trial = xi.scale(R::splat(-self.stiffness)) - v.scale(gamma);
+        let limit = R::splat(self.mu_static) * f_rep;
+        let t2 = trial.dot(trial);
+        let slip = t2.gt(limit * limit);
+        let capped = trial.scale(R::splat(self.mu_dynamic) * f_rep / t2.sqrt());
+        let reset = if self.stiffness > 0.0 {
+            (capped + v.scale(gamma)).scale(R::splat(-1.0 / self.stiffness))
         } else {
-            (trial, false)
-        }
+            V3::zero()
+        };
+        *xi = V3::select(slip, reset, *xi);
+        (V3::select(slip, capped, trial), slip)
     }
 }
 
@@ -110,22 +145,21 @@ impl Resistance {
 /// steps the normal turns by a tiny angle, so `x` is tiny and the series
 /// `1 + x/2 + 3x²/8` (relative error below `x³`, i.e. 1e-12 for `x < 1e-4`) replaces a
 /// square root and a division on the hot path.
-#[inline]
-fn rotate_into_plane(xi: &mut DVec3, n: DVec3) {
-    let len2 = xi.length_squared();
-    if len2 == 0.0 {
-        return;
-    }
+#[inline(always)]
+fn rotate_into_plane<R: Real>(xi: &mut V3<R>, n: V3<R>) {
+    let len2 = xi.dot(*xi);
     let c = n.dot(*xi);
-    let t = *xi - n * c;
+    let t = *xi - n.scale(c);
     let x = c * c / len2;
-    *xi = if x < 1e-4 {
-        t * (1.0 + x * (0.5 + 0.375 * x))
-    } else if x < 1.0 {
-        t * (1.0 / (1.0 - x)).sqrt()
-    } else {
-        DVec3::ZERO
-    };
+    let one = R::splat(1.0);
+    let series = t.scale(one + x * (R::splat(0.5) + R::splat(0.375) * x));
+    let exact = t.scale((one / (one - x)).sqrt());
+    let rotated = V3::select(
+        x.lt(R::splat(1e-4)),
+        series,
+        V3::select(x.lt(one), exact, V3::zero()),
+    );
+    *xi = V3::select(len2.eq(R::splat(0.0)), *xi, rotated);
 }
 
 #[cfg(test)]
@@ -161,9 +195,13 @@ mod tests {
 
     #[test]
     fn rotation_keeps_spring_length_in_new_plane() {
-        let mut xi = DVec3::new(3.0, 0.0, 4.0);
-        rotate_into_plane(&mut xi, DVec3::Z);
-        assert!((xi - DVec3::new(5.0, 0.0, 0.0)).length() < 1e-14);
+        let mut xi = V3::new(3.0, 0.0, 4.0);
+        rotate_into_plane(&mut xi, V3::new(0.0, 0.0, 1.0));
+        assert!((xi.to_glam() - DVec3::new(5.0, 0.0, 0.0)).length() < 1e-14);
+        // A spring of zero length stays zero (no 0/0).
+        let mut zero = V3::zero();
+        rotate_into_plane(&mut zero, V3::new(0.0, 0.0, 1.0));
+        assert_eq!(zero, V3::zero());
     }
 }
 

@@ -12,6 +12,8 @@ pub mod adhesion;
 pub mod curve;
 pub mod equivalent;
 pub mod friction;
+pub mod kernel;
+pub mod lanes;
 pub mod normal;
 
 use crate::domain::ImageTransform;
@@ -20,6 +22,7 @@ use serde::{Deserialize, Serialize};
 
 pub use adhesion::Adhesion;
 pub use friction::Resistance;
+pub use kernel::PairKernel;
 pub use normal::{Damping, NormalLaw};
 
 /// The full contact law of one species pair.
@@ -170,114 +173,19 @@ impl ContactLaw {
     /// assert!((apart.force.x - (10.0 * 4.0e-5 - 1.0e-3)).abs() < 1e-15);
     /// assert!(law.interact(&at(-2.0e-4), &mut h, 1e-5).is_none());
     /// ```
-    #[inline(always)]
     pub fn interact(
         &self,
         k: &PairKinematics,
         h: &mut ContactHistory,
         dt: f64,
     ) -> Option<PairForce> {
-        if k.overlap >= 0.0 {
-            return Some(self.evaluate(k, h, dt));
-        }
-        // Apart: the springs relax; only the adhesive law (and its bridge) may act.
-        let bridge = h.bridge;
-        *h = ContactHistory::default();
-        if self.adhesion.is_none() {
-            return None;
-        }
-        let (f_a, alive) = self
-            .adhesion
-            .separated_force(-k.overlap, k.radius_i, k.radius_j, bridge);
-        h.bridge = alive;
-        (f_a != 0.0).then(|| PairForce {
-            force: k.normal * f_a,
-            adhesive: f_a,
-            ..PairForce::default()
-        })
+        PairKernel::new(self).interact(k, h, dt)
     }
 
-    /// Evaluates the contact of a touching pair (`overlap > 0`) and advances its history
+    /// Evaluates the contact of a touching pair (`overlap ≥ 0`) and advances its history
     /// over `dt` (s). The Coulomb limits use the repulsive part `|k_n δ + γ_n δ̇|` alone.
-    #[inline(always)]
     pub fn evaluate(&self, k: &PairKinematics, h: &mut ContactHistory, dt: f64) -> PairForce {
-        let n = k.normal;
-        let lever_i = k.radius_i - 0.5 * k.overlap;
-        let lever_j = k.radius_j - 0.5 * k.overlap;
-        // Relative velocity of the two surfaces at the contact point (middle of the overlap).
-        let spin = if lever_j.is_finite() {
-            lever_i * k.omega_i + lever_j * k.omega_j
-        } else {
-            lever_i * k.omega_i
-        };
-        let v_contact = k.velocity - spin.cross(n);
-        let overlap_rate = -k.velocity.dot(n);
-        let gamma_n = self.normal.damping.coefficient(k.reduced_mass);
-        let f_rep = self.normal.force(k.overlap, overlap_rate, gamma_n);
-        let limit_ref = f_rep.abs();
-
-        let f_a = if self.adhesion.is_none() {
-            0.0
-        } else {
-            h.bridge = self.adhesion.needs_bridge();
-            self.adhesion.contact_force(k.radius_i, k.radius_j)
-        };
-        let mut out = PairForce {
-            force: n * (f_rep + f_a),
-            repulsive: f_rep,
-            adhesive: f_a,
-            ..PairForce::default()
-        };
-
-        if self.tangential.is_active() {
-            let v_t = v_contact - n * n.dot(v_contact);
-            let gamma_t = self.tangential.damping.coefficient(k.reduced_mass);
-            let (f_t, slip) =
-                self.tangential
-                    .update_in_plane(&mut h.tangential, n, v_t, gamma_t, limit_ref, dt);
-            let arm = n.cross(f_t);
-            out.force += f_t;
-            out.torque_i -= lever_i * arm;
-            if lever_j.is_finite() {
-                out.torque_j -= lever_j * arm;
-            }
-            out.sliding = slip;
-        }
-
-        if self.rolling.is_active() || self.torsion.is_active() {
-            let a_eff = if k.radius_j.is_finite() {
-                k.radius_i * k.radius_j / (k.radius_i + k.radius_j)
-            } else {
-                k.radius_i
-            };
-            let w_rel = k.omega_i - k.omega_j;
-            if self.rolling.is_active() {
-                let v_r = -a_eff * w_rel.cross(n);
-                let gamma_r = self.rolling.damping.coefficient(k.reduced_mass);
-                let (f_r, _) =
-                    self.rolling
-                        .update_in_plane(&mut h.rolling, n, v_r, gamma_r, limit_ref, dt);
-                let t = -a_eff * n.cross(f_r);
-                out.torque_i += t;
-                out.torque_j -= t;
-            }
-            if self.torsion.is_active() {
-                let v_o = a_eff * w_rel.dot(n) * n;
-                let gamma_o = self.torsion.damping.coefficient(k.reduced_mass);
-                let (f_o, _) = self.torsion.update_along_normal(
-                    &mut h.torsion,
-                    n,
-                    v_o,
-                    gamma_o,
-                    limit_ref,
-                    dt,
-                );
-                let t = a_eff * f_o;
-                out.torque_i += t;
-                out.torque_j -= t;
-            }
-        }
-        out
+        PairKernel::new(self).touching(k, h, dt)
     }
 
     /// Elastic energy stored in a pair (J): `½ k_n δ² + ½ k_t |ξ_t|² + ½ k_r |ξ_r|²
@@ -296,19 +204,51 @@ impl ContactLaw {
     }
 }
 
-/// Contact laws of every species pair, `n_species × n_species`, symmetric.
+/// Contact laws of every species pair, `n_species × n_species`, symmetric, with each law
+/// resolved into the [`PairKernel`] the pair loop uses (derived, not serialised: a table
+/// is stored as its species count and laws alone).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(from = "StoredTable", into = "StoredTable")]
 pub struct ContactTable {
     species: usize,
     laws: Vec<ContactLaw>,
+    kernels: Vec<PairKernel>,
+}
+
+/// The serialised form of a [`ContactTable`].
+#[derive(Clone, Serialize, Deserialize)]
+struct StoredTable {
+    species: usize,
+    laws: Vec<ContactLaw>,
+}
+
+impl From<StoredTable> for ContactTable {
+    fn from(t: StoredTable) -> ContactTable {
+        ContactTable::from_laws(t.species, t.laws)
+    }
+}
+
+impl From<ContactTable> for StoredTable {
+    fn from(t: ContactTable) -> StoredTable {
+        StoredTable {
+            species: t.species,
+            laws: t.laws,
+        }
+    }
 }
 
 impl ContactTable {
     /// A table where every pair of the `species` species uses `law`.
     pub fn uniform(species: usize, law: ContactLaw) -> ContactTable {
+        ContactTable::from_laws(species, vec![law; species * species])
+    }
+
+    fn from_laws(species: usize, laws: Vec<ContactLaw>) -> ContactTable {
+        let kernels = laws.iter().map(PairKernel::new).collect();
         ContactTable {
             species,
-            laws: vec![law; species * species],
+            laws,
+            kernels,
         }
     }
 
@@ -326,16 +266,25 @@ impl ContactTable {
     pub fn set(&mut self, a: usize, b: usize, law: ContactLaw) {
         self.laws[a * self.species + b] = law;
         self.laws[b * self.species + a] = law;
+        self.kernels[a * self.species + b] = PairKernel::new(&law);
+        self.kernels[b * self.species + a] = PairKernel::new(&law);
     }
 
     /// Applies `f` to the law of every pair.
     pub fn map(&mut self, f: impl FnMut(&mut ContactLaw)) {
         self.laws.iter_mut().for_each(f);
+        self.kernels = self.laws.iter().map(PairKernel::new).collect();
     }
 
     /// The law of the pair `(a, b)`.
     #[inline]
     pub fn get(&self, a: u16, b: u16) -> &ContactLaw {
         &self.laws[a as usize * self.species + b as usize]
+    }
+
+    /// The resolved kernel of the pair `(a, b)`.
+    #[inline(always)]
+    pub fn kernel(&self, a: u16, b: u16) -> &PairKernel {
+        &self.kernels[a as usize * self.species + b as usize]
     }
 }

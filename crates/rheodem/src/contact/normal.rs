@@ -1,5 +1,6 @@
 //! Linear visco-elastic normal force (docs/model.md §2.2): `f_n = k_n δ + γ_n dδ/dt`.
 
+use super::lanes::Real;
 use serde::{Deserialize, Serialize};
 use std::f64::consts::PI;
 
@@ -54,11 +55,18 @@ impl Damping {
     /// The coefficient for reduced mass `m_ij` (kg/s).
     #[inline]
     pub fn coefficient(&self, m_ij: f64) -> f64 {
-        let mut g = self.fixed + self.per_mass * m_ij;
+        self.in_lanes(m_ij)
+    }
+
+    /// [`Damping::coefficient`] in lanes.
+    #[inline(always)]
+    pub fn in_lanes<R: Real>(&self, m_ij: R) -> R {
+        let g = R::splat(self.fixed) + R::splat(self.per_mass) * m_ij;
         if self.per_sqrt_mass != 0.0 {
-            g += self.per_sqrt_mass * m_ij.sqrt();
+            g + R::splat(self.per_sqrt_mass) * m_ij.sqrt()
+        } else {
+            g
         }
-        g
     }
 }
 
