@@ -14,7 +14,7 @@
 //! the [`ContactObserver`] of the call.
 
 use crate::contact::kernel::{Springs, Touch};
-use crate::contact::lanes::{F4, Real};
+use crate::contact::lanes::{F4, Real, V3};
 use crate::contact::{ContactHistory, ContactTable, PairForce, PairKernel, PairKinematics};
 use crate::domain::{IDENTITY_IMAGE, IMAGE_COUNT, ImageTransform};
 use crate::neighbor::NeighborList;
@@ -28,7 +28,16 @@ use rayon::prelude::*;
 pub struct ForceScratch {
     force: Vec<Vec<DVec3>>,
     torque: Vec<Vec<DVec3>>,
-    touching: Vec<Vec<Touching>>,
+    found: Vec<Found>,
+}
+
+/// The pairs within reach that the first pass of a chunk found.
+#[derive(Clone, Debug, Default)]
+struct Found {
+    /// Touching pairs.
+    touching: Vec<Touching>,
+    /// Pairs apart within the interaction range (adhesive laws).
+    apart: Vec<Touching>,
 }
 
 /// Read-only particle data of the loop.
@@ -90,7 +99,7 @@ pub fn pair_forces<O: ContactObserver>(
 
     scratch.force.resize_with(chunks - 1, Vec::new);
     scratch.torque.resize_with(chunks - 1, Vec::new);
-    scratch.touching.resize_with(chunks, Vec::new);
+    scratch.found.resize_with(chunks, Found::default);
     for buf in scratch.force.iter_mut().chain(scratch.torque.iter_mut()) {
         buf.clear();
         buf.resize(n, DVec3::ZERO);
@@ -115,12 +124,12 @@ pub fn pair_forces<O: ContactObserver>(
         };
         jobs.push((lo..hi, t_here, h_here, f, t));
     }
-    let jobs: Vec<_> = jobs.into_iter().zip(scratch.touching.iter_mut()).collect();
+    let jobs: Vec<_> = jobs.into_iter().zip(scratch.found.iter_mut()).collect();
 
     let partial: Vec<O> = jobs
         .into_par_iter()
-        .map(|((range, active, history, force, torque), touching)| {
-            chunk_forces::<O>(&inputs, range, active, history, force, torque, touching)
+        .map(|((range, active, history, force, torque), found)| {
+            chunk_forces::<O>(&inputs, range, active, history, force, torque, found)
         })
         .collect();
 
@@ -148,7 +157,7 @@ pub fn pair_forces<O: ContactObserver>(
     total
 }
 
-/// A touching pair found by the first pass of [`chunk_forces`].
+/// A pair within reach found by the first pass of [`chunk_forces`].
 #[derive(Clone, Copy, Debug, Default)]
 pub(crate) struct Touching {
     /// The pair's index in the chunk's slice of the list.
@@ -165,9 +174,9 @@ pub(crate) struct Touching {
 }
 
 /// Forces of the pairs whose first slot lies in `range`, in two passes: the list is
-/// scanned for pairs within reach (pairs apart that still attract are evaluated on the
-/// spot, the touching ones are written compactly into `touching`), then the contact law
-/// runs over the touching pairs four at a time. On x86-64 CPUs with AVX2 the same code is
+/// scanned for pairs within reach, written compactly into `found` (touching pairs, and
+/// pairs apart within an adhesive law's range), then the contact law runs over each kind
+/// four pairs at a time. On x86-64 CPUs with AVX2 the same code is
 /// compiled a second time for them and chosen at run time; both give the same bits.
 fn chunk_forces<O: ContactObserver>(
     inp: &Inputs<'_>,
@@ -176,16 +185,16 @@ fn chunk_forces<O: ContactObserver>(
     history: &mut [ContactHistory],
     force: &mut [DVec3],
     torque: &mut [DVec3],
-    touching: &mut Vec<Touching>,
+    found: &mut Found,
 ) -> O {
     #[cfg(target_arch = "x86_64")]
     if std::arch::is_x86_feature_detected!("avx2") {
         // SAFETY: the CPU supports AVX2, checked just above.
         return unsafe {
-            chunk_forces_avx2::<O>(inp, range, active, history, force, torque, touching)
+            chunk_forces_avx2::<O>(inp, range, active, history, force, torque, found)
         };
     }
-    chunk_forces_generic::<O>(inp, range, active, history, force, torque, touching)
+    chunk_forces_generic::<O>(inp, range, active, history, force, torque, found)
 }
 
 /// [`chunk_forces_generic`] compiled with AVX2.
@@ -198,9 +207,9 @@ fn chunk_forces_avx2<O: ContactObserver>(
     history: &mut [ContactHistory],
     force: &mut [DVec3],
     torque: &mut [DVec3],
-    touching: &mut Vec<Touching>,
+    found: &mut Found,
 ) -> O {
-    chunk_forces_generic::<O>(inp, range, active, history, force, torque, touching)
+    chunk_forces_generic::<O>(inp, range, active, history, force, torque, found)
 }
 
 #[inline(always)]
@@ -211,13 +220,14 @@ fn chunk_forces_generic<O: ContactObserver>(
     history: &mut [ContactHistory],
     force: &mut [DVec3],
     torque: &mut [DVec3],
-    touching: &mut Vec<Touching>,
+    found: &mut Found,
 ) -> O {
     let mut obs = O::default();
     let base = inp.offsets[range.start] as usize;
-    // Pass 1: the touching pairs go into `touching`; pairs apart within the interaction
-    // range are evaluated on the spot.
+    // Pass 1: the pairs within reach.
+    let Found { touching, apart } = found;
     touching.clear();
+    apart.clear();
     for i in range {
         let r_i = inp.position[i];
         let a_i = inp.radius[i];
@@ -242,29 +252,31 @@ fn chunk_forces_generic<O: ContactObserver>(
                 continue;
             }
             let dist = d2.sqrt();
+            let pair = Touching {
+                local: local as u32,
+                i: i as u32,
+                j: j as u32,
+                code,
+                branch,
+                dist,
+            };
             if sum - dist >= 0.0 {
-                touching.push(Touching {
-                    local: local as u32,
-                    i: i as u32,
-                    j: j as u32,
-                    code,
-                    branch,
-                    dist,
-                });
+                touching.push(pair);
             } else {
-                let (h, a) = (&mut history[local], &mut active[local]);
-                apart_pair::<O>(inp, i, j, code, branch, dist, h, a, force, torque, &mut obs);
+                apart.push(pair);
             }
         }
     }
-    // Pass 2: the contact law over the touching pairs, four at a time.
+    // Pass 2: the contact law over each kind of pair, four at a time.
     let uniform = inp.laws.species() == 1;
-    for batch in touching.chunks(LANES) {
-        if uniform
+    let same_kernel = |batch: &[Touching]| {
+        uniform
             || batch
                 .iter()
                 .all(|c| inp.kernel_of(c) == inp.kernel_of(&batch[0]))
-        {
+    };
+    for batch in touching.chunks(LANES) {
+        if same_kernel(batch) {
             touch_batch::<O>(
                 inp,
                 inp.kernel_of(&batch[0]),
@@ -278,6 +290,33 @@ fn chunk_forces_generic<O: ContactObserver>(
         } else {
             for c in batch {
                 touch_batch::<O>(
+                    inp,
+                    inp.kernel_of(c),
+                    std::slice::from_ref(c),
+                    active,
+                    history,
+                    force,
+                    torque,
+                    &mut obs,
+                );
+            }
+        }
+    }
+    for batch in apart.chunks(LANES) {
+        if same_kernel(batch) {
+            apart_batch::<O>(
+                inp,
+                inp.kernel_of(&batch[0]),
+                batch,
+                active,
+                history,
+                force,
+                torque,
+                &mut obs,
+            );
+        } else {
+            for c in batch {
+                apart_batch::<O>(
                     inp,
                     inp.kernel_of(c),
                     std::slice::from_ref(c),
@@ -356,44 +395,72 @@ fn add_pair(
     }
 }
 
-/// A pair apart within the interaction range (adhesive laws), evaluated alone.
+/// Up to [`LANES`] pairs apart within the interaction range with the same kernel,
+/// evaluated in one lane group as [`touch_batch`] does. Their springs relax; the adhesive
+/// law (and its bridge) alone may act.
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
-fn apart_pair<O: ContactObserver>(
+fn apart_batch<O: ContactObserver>(
     inp: &Inputs<'_>,
-    i: usize,
-    j: usize,
-    code: u8,
-    branch: DVec3,
-    dist: f64,
-    h: &mut ContactHistory,
-    active: &mut bool,
+    kernel: &PairKernel,
+    batch: &[Touching],
+    active: &mut [bool],
+    history: &mut [ContactHistory],
     force: &mut [DVec3],
     torque: &mut [DVec3],
     obs: &mut O,
 ) {
-    let kin = inp.kinematics(i, j, code, branch, dist);
-    let (s_i, s_j) = (inp.species[i], inp.species[j]);
-    let Some(pf) = inp.laws.kernel(s_i, s_j).apart(&kin, h) else {
-        *active = false;
-        return;
-    };
-    *active = true;
-    let image = &inp.images[code as usize];
-    add_pair(force, torque, image, i, j, &pf);
-    if O::OBSERVES {
-        obs.visit(&ContactView {
-            ids: [inp.id[i], inp.id[j]],
-            parts: [inp.part[i], inp.part[j]],
-            wall: None,
-            image,
-            position: inp.position[i],
-            branch,
-            kinematics: &kin,
-            force: &pf,
-            law: inp.laws.get(s_i, s_j),
-            history: h,
-        });
+    let mut branch = V3::<F4>::default();
+    let (mut dist, mut sum) = (F4::default(), F4::default());
+    let (mut radius_i, mut radius_j) = (F4::default(), F4::default());
+    let mut bridge = [false; LANES];
+    for l in 0..LANES {
+        let c = batch.get(l).unwrap_or(&batch[0]);
+        let (i, j) = (c.i as usize, c.j as usize);
+        branch.set_lane(l, c.branch);
+        dist.0[l] = c.dist;
+        radius_i.0[l] = inp.radius[i];
+        radius_j.0[l] = inp.radius[j];
+        sum.0[l] = inp.radius[i] + inp.radius[j];
+        bridge[l] = history[c.local as usize].bridge;
+    }
+    let normal = branch.scale(F4::splat(1.0) / dist);
+    let separation = -(sum - dist);
+    let (f_a, alive) = kernel.apart_lanes::<F4, false>(separation, radius_i, radius_j, bridge);
+    for (l, c) in batch.iter().enumerate() {
+        let (i, j, local) = (c.i as usize, c.j as usize, c.local as usize);
+        let h = &mut history[local];
+        *h = ContactHistory {
+            bridge: alive[l],
+            ..ContactHistory::default()
+        };
+        let f = f_a.0[l];
+        if f == 0.0 {
+            active[local] = false;
+            continue;
+        }
+        active[local] = true;
+        let pf = PairForce {
+            force: normal.lane(l) * f,
+            adhesive: f,
+            ..PairForce::default()
+        };
+        let image = &inp.images[c.code as usize];
+        add_pair(force, torque, image, i, j, &pf);
+        if O::OBSERVES {
+            obs.visit(&ContactView {
+                ids: [inp.id[i], inp.id[j]],
+                parts: [inp.part[i], inp.part[j]],
+                wall: None,
+                image,
+                position: inp.position[i],
+                branch: c.branch,
+                kinematics: &inp.kinematics(i, j, c.code, c.branch, c.dist),
+                force: &pf,
+                law: inp.laws.get(inp.species[i], inp.species[j]),
+                history: h,
+            });
+        }
     }
 }
 

@@ -85,9 +85,10 @@ pub fn bridge_radius(a_i: f64, a_j: f64) -> f64 {
 }
 
 /// Willett's force factor `1 / (1 + 1.05 S̄ + 2.5 S̄²)` at scaled separation `S̄`.
-#[inline]
-pub fn willett_factor(s_bar: f64) -> f64 {
-    1.0 / (1.0 + s_bar * (1.05 + 2.5 * s_bar))
+#[inline(always)]
+pub fn willett_factor<R: Real>(s_bar: R) -> R {
+    let one = R::splat(1.0);
+    one / (one + s_bar * (R::splat(1.05) + R::splat(2.5) * s_bar))
 }
 
 /// `∫₀^x dt / (1 + 1.05 t + 2.5 t²)`, in closed form (the quadratic has no real root).
@@ -325,35 +326,57 @@ impl ResolvedAdhesion {
     /// `bridge` says whether an irreversible law's bridge exists.
     #[inline(always)]
     pub fn separated_force(&self, s: f64, a_i: f64, a_j: f64, bridge: bool) -> (f64, bool) {
+        if a_j.is_finite() {
+            self.separated_force_lanes::<f64, false>(s, a_i, a_j, bridge)
+        } else {
+            self.separated_force_lanes::<f64, true>(s, a_i, a_j, bridge)
+        }
+    }
+
+    /// [`ResolvedAdhesion::separated_force`] in lanes, for two spheres or (`WALL`) a
+    /// sphere on a wall (`a_j` unused).
+    #[inline(always)]
+    pub fn separated_force_lanes<R: Real, const WALL: bool>(
+        &self,
+        s: R,
+        a_i: R,
+        a_j: R,
+        bridge: R::Mask,
+    ) -> (R, R::Mask) {
+        let zero = R::splat(0.0);
         match *self {
-            ResolvedAdhesion::None => (0.0, false),
+            ResolvedAdhesion::None => (zero, R::all(false)),
             ResolvedAdhesion::Reversible {
                 max_force,
                 stiffness,
-            } => ((stiffness * s - max_force).min(0.0), false),
+            } => {
+                let f = R::splat(stiffness) * s - R::splat(max_force);
+                (R::select(f.lt(zero), f, zero), R::all(false))
+            }
             ResolvedAdhesion::LinearIrreversible {
                 max_force,
                 stiffness,
                 range,
             } => {
-                if bridge && s <= range {
-                    (stiffness * s - max_force, true)
-                } else {
-                    (0.0, false)
-                }
+                let alive = R::both(bridge, s.le(R::splat(range)));
+                let f = R::splat(stiffness) * s - R::splat(max_force);
+                (R::select(alive, f, zero), alive)
             }
             ResolvedAdhesion::LiquidBridge {
                 force_per_radius,
                 range,
                 inv_volume,
             } => {
-                if bridge && s <= range {
-                    let r = bridge_radius(a_i, a_j);
-                    let f = -(force_per_radius * r) * willett_factor(s * (r * inv_volume).sqrt());
-                    (f, true)
+                let alive = R::both(bridge, s.le(R::splat(range)));
+                let two = R::splat(2.0);
+                let r = if WALL {
+                    two * a_i
                 } else {
-                    (0.0, false)
-                }
+                    two * a_i * a_j / (a_i + a_j)
+                };
+                let s_bar = s * (r * R::splat(inv_volume)).sqrt();
+                let f = -(R::splat(force_per_radius) * r) * willett_factor(s_bar);
+                (R::select(alive, f, zero), alive)
             }
         }
     }

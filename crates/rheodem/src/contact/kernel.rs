@@ -142,6 +142,20 @@ impl PairKernel {
         }
     }
 
+    /// [`PairKernel::apart`]'s adhesive force (N, ≤ 0) in lanes, at separation `s` (m), with
+    /// whether each bridge survives; `bridge` says which bridges exist.
+    #[inline(always)]
+    pub fn apart_lanes<R: Real, const WALL: bool>(
+        &self,
+        s: R,
+        radius_i: R,
+        radius_j: R,
+        bridge: R::Mask,
+    ) -> (R, R::Mask) {
+        self.adhesion
+            .separated_force_lanes::<R, WALL>(s, radius_i, radius_j, bridge)
+    }
+
     /// Whether a bridge forms at contact (irreversible adhesive laws).
     #[inline(always)]
     pub fn needs_bridge(&self) -> bool {
@@ -180,7 +194,7 @@ impl PairKernel {
             torque_j: V3::zero(),
             repulsive: f_rep,
             adhesive: f_a,
-            sliding: R::lt(R::splat(1.0), R::splat(0.0)),
+            sliding: R::all(false),
         };
 
         if self.sliding {

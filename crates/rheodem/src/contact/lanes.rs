@@ -32,6 +32,12 @@ pub trait Real:
     fn gt(self, other: Self) -> Self::Mask;
     /// `self == other`, lane by lane.
     fn eq(self, other: Self) -> Self::Mask;
+    /// `self <= other`, lane by lane.
+    fn le(self, other: Self) -> Self::Mask;
+    /// Every lane `b`.
+    fn all(b: bool) -> Self::Mask;
+    /// `a && b`, lane by lane.
+    fn both(a: Self::Mask, b: Self::Mask) -> Self::Mask;
     /// `if mask { a } else { b }`, lane by lane.
     fn select(mask: Self::Mask, a: Self, b: Self) -> Self;
 }
@@ -61,6 +67,18 @@ impl Real for f64 {
     #[inline(always)]
     fn eq(self, other: f64) -> bool {
         self == other
+    }
+    #[inline(always)]
+    fn le(self, other: f64) -> bool {
+        self <= other
+    }
+    #[inline(always)]
+    fn all(b: bool) -> bool {
+        b
+    }
+    #[inline(always)]
+    fn both(a: bool, b: bool) -> bool {
+        a && b
     }
     #[inline(always)]
     fn select(mask: bool, a: f64, b: f64) -> f64 {
@@ -128,6 +146,18 @@ impl Real for F4 {
     #[inline(always)]
     fn eq(self, other: F4) -> [bool; 4] {
         std::array::from_fn(|l| self.0[l] == other.0[l])
+    }
+    #[inline(always)]
+    fn le(self, other: F4) -> [bool; 4] {
+        std::array::from_fn(|l| self.0[l] <= other.0[l])
+    }
+    #[inline(always)]
+    fn all(b: bool) -> [bool; 4] {
+        [b; 4]
+    }
+    #[inline(always)]
+    fn both(a: [bool; 4], b: [bool; 4]) -> [bool; 4] {
+        std::array::from_fn(|l| a[l] && b[l])
     }
     #[inline(always)]
     fn select(mask: [bool; 4], a: F4, b: F4) -> F4 {
