@@ -262,8 +262,12 @@ fn chunk_forces_generic<O: ContactObserver>(
             };
             if sum - dist >= 0.0 {
                 touching.push(pair);
-            } else {
+            } else if history[local].bridge || !inp.kernel_of(&pair).needs_bridge() {
                 apart.push(pair);
+            } else if active[local] {
+                // Apart without a bridge under an irreversible law: no force.
+                active[local] = false;
+                history[local] = ContactHistory::default();
             }
         }
     }
