@@ -418,7 +418,7 @@ fn apart_batch<O: ContactObserver>(
     let (mut dist, mut sum) = (F4::default(), F4::default());
     let (mut radius_i, mut radius_j) = (F4::default(), F4::default());
     let mut bridge = [false; LANES];
-    for l in 0..LANES {
+    for (l, bridged) in bridge.iter_mut().enumerate() {
         let c = batch.get(l).unwrap_or(&batch[0]);
         let (i, j) = (c.i as usize, c.j as usize);
         branch.set_lane(l, c.branch);
@@ -426,7 +426,7 @@ fn apart_batch<O: ContactObserver>(
         radius_i.0[l] = inp.radius[i];
         radius_j.0[l] = inp.radius[j];
         sum.0[l] = inp.radius[i] + inp.radius[j];
-        bridge[l] = history[c.local as usize].bridge;
+        *bridged = history[c.local as usize].bridge;
     }
     let normal = branch.scale(F4::splat(1.0) / dist);
     let separation = -(sum - dist);

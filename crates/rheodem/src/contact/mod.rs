@@ -3,8 +3,10 @@
 //! A [`ContactLaw`] combines independent parts: the linear visco-elastic [`NormalLaw`],
 //! three spring–dashpot–Coulomb [`Resistance`]s (sliding, rolling, torsion) and an
 //! [`Adhesion`] law. Per-contact state lives in one [`ContactHistory`] record.
-//! [`ContactLaw::interact`] is the single pair kernel used by the force loop for particle
-//! pairs and for planar walls alike.
+//! A [`ContactTable`] resolves each species pair's law into a [`PairKernel`]
+//! (`kernel.rs`), the single implementation of the law, written generic over one contact
+//! or four in lanes (`lanes.rs`); the force loop, the walls and [`ContactLaw::interact`]
+//! all run it.
 //! Sign convention: `n` points from the second particle `j` to the first `i`; the returned
 //! force acts on `i`, and `−force` on `j`.
 
