@@ -97,15 +97,14 @@ pub fn pair_forces<O: ContactObserver>(
         dt,
     };
 
+    // Each chunk zeroes the part of its buffers it can write (the slots from its first
+    // one on, as every pair `i < j` has `i` in the chunk) inside its own task.
     scratch.force.resize_with(chunks - 1, Vec::new);
     scratch.torque.resize_with(chunks - 1, Vec::new);
     scratch.found.resize_with(chunks, Found::default);
     for buf in scratch.force.iter_mut().chain(scratch.torque.iter_mut()) {
-        buf.clear();
         buf.resize(n, DVec3::ZERO);
     }
-    particles.force.iter_mut().for_each(|f| *f = DVec3::ZERO);
-    particles.torque.iter_mut().for_each(|t| *t = DVec3::ZERO);
 
     // Carve the history into one disjoint slice per chunk.
     let mut jobs = Vec::with_capacity(chunks);
@@ -129,6 +128,8 @@ pub fn pair_forces<O: ContactObserver>(
     let partial: Vec<O> = jobs
         .into_par_iter()
         .map(|((range, active, history, force, torque), found)| {
+            force[range.start..].fill(DVec3::ZERO);
+            torque[range.start..].fill(DVec3::ZERO);
             chunk_forces::<O>(&inputs, range, active, history, force, torque, found)
         })
         .collect();
@@ -143,9 +144,12 @@ pub fn pair_forces<O: ContactObserver>(
             .enumerate()
             .with_min_len(1024)
             .for_each(|(i, (f, t))| {
-                for (bf, bt) in extra_f.iter().zip(extra_t) {
-                    *f += bf[i];
-                    *t += bt[i];
+                // Chunk `c` wrote only the slots from `bounds[c]` on.
+                for ((bf, bt), &first) in extra_f.iter().zip(extra_t).zip(&bounds[1..]) {
+                    if i >= first {
+                        *f += bf[i];
+                        *t += bt[i];
+                    }
                 }
             });
     }

@@ -1,14 +1,16 @@
 //! Velocity Verlet with rotation, and prescribed motion of wall particles.
 //!
-//! One step of length `dt` is `kick(dt/2)`, `drift(dt)`, force evaluation, `kick(dt/2)`.
+//! One step of length `dt` is `kick(dt/2)`, `drift(dt)` (one pass, [`kick_drift`]), force
+//! evaluation, `kick(dt/2)`.
 //! Spheres need no orientation for their dynamics, so only angular velocities are integrated.
 
 use crate::particles::{Motion, Particles};
 use glam::{DQuat, DVec3};
 use rayon::prelude::*;
 
-/// Minimum particles per rayon task in the element-wise loops.
-const MIN_LEN: usize = 2048;
+/// Fewest particles per rayon task in the loops over particles: such a loop costs
+/// nanoseconds per particle, handing a task to another thread microseconds.
+pub(crate) const PARTICLES_PER_TASK: usize = 2048;
 
 /// Half-step velocity update `v += F/m · h`, `ω += T/I · h` (free particles only: prescribed
 /// ones have zero inverse mass and inertia).
@@ -18,11 +20,14 @@ pub fn kick(p: &mut Particles, h: f64) {
         .zip(p.angular_velocity.par_iter_mut())
         .zip(p.force.par_iter().zip(&p.torque))
         .zip(p.inv_mass.par_iter().zip(&p.inv_inertia))
-        .with_min_len(MIN_LEN)
-        .for_each(|(((v, w), (f, t)), (im, ii))| {
-            *v += *f * (im * h);
-            *w += *t * (ii * h);
-        });
+        .with_min_len(PARTICLES_PER_TASK)
+        .for_each(|(((v, w), (f, t)), (im, ii))| kick_one(v, w, *f, *t, *im, *ii, h));
+}
+
+#[inline(always)]
+fn kick_one(v: &mut DVec3, w: &mut DVec3, f: DVec3, t: DVec3, im: f64, ii: f64, h: f64) {
+    *v += f * (im * h);
+    *w += t * (ii * h);
 }
 
 /// Position update over `dt` (s): free particles move with their velocity; prescribed ones
@@ -33,24 +38,46 @@ pub fn drift(p: &mut Particles, dt: f64) {
         .zip(p.velocity.par_iter_mut())
         .zip(p.angular_velocity.par_iter_mut())
         .zip(p.motion.par_iter())
-        .with_min_len(MIN_LEN)
-        .for_each(|(((r, v), w), motion)| match *motion {
-            Motion::Free => *r += *v * dt,
-            Motion::Fixed => {
-                *v = DVec3::ZERO;
-                *w = DVec3::ZERO;
-            }
-            Motion::Rotating {
-                center,
-                axis,
-                omega,
-            } => {
-                let q = DQuat::from_axis_angle(axis, omega * dt);
-                *r = center + q * (*r - center);
-                *w = axis * omega;
-                *v = w.cross(*r - center);
-            }
+        .with_min_len(PARTICLES_PER_TASK)
+        .for_each(|(((r, v), w), motion)| drift_one(r, v, w, motion, dt));
+}
+
+/// [`kick`] over `h` (s) followed by [`drift`] over `dt` (s), in one pass over the
+/// particles (the same numbers as the two calls).
+pub fn kick_drift(p: &mut Particles, h: f64, dt: f64) {
+    p.position
+        .par_iter_mut()
+        .zip(p.velocity.par_iter_mut())
+        .zip(p.angular_velocity.par_iter_mut())
+        .zip(p.motion.par_iter())
+        .zip(p.force.par_iter().zip(&p.torque))
+        .zip(p.inv_mass.par_iter().zip(&p.inv_inertia))
+        .with_min_len(PARTICLES_PER_TASK)
+        .for_each(|(((((r, v), w), motion), (f, t)), (im, ii))| {
+            kick_one(v, w, *f, *t, *im, *ii, h);
+            drift_one(r, v, w, motion, dt);
         });
+}
+
+#[inline(always)]
+fn drift_one(r: &mut DVec3, v: &mut DVec3, w: &mut DVec3, motion: &Motion, dt: f64) {
+    match *motion {
+        Motion::Free => *r += *v * dt,
+        Motion::Fixed => {
+            *v = DVec3::ZERO;
+            *w = DVec3::ZERO;
+        }
+        Motion::Rotating {
+            center,
+            axis,
+            omega,
+        } => {
+            let q = DQuat::from_axis_angle(axis, omega * dt);
+            *r = center + q * (*r - center);
+            *w = axis * omega;
+            *v = w.cross(*r - center);
+        }
+    }
 }
 
 /// Adds gravity `m g` (N) to the force of every free particle.
@@ -61,7 +88,7 @@ pub fn add_gravity(p: &mut Particles, g: DVec3) {
     p.force
         .par_iter_mut()
         .zip(p.mass.par_iter().zip(&p.motion))
-        .with_min_len(MIN_LEN)
+        .with_min_len(PARTICLES_PER_TASK)
         .for_each(|(f, (m, motion))| {
             if motion.is_free() {
                 *f += g * *m;

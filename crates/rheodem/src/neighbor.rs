@@ -18,6 +18,7 @@
 
 use crate::contact::ContactHistory;
 use crate::domain::{Domain, IDENTITY_IMAGE, IMAGE_COUNT, ImageTransform, image_code};
+use crate::integrate::PARTICLES_PER_TASK;
 use crate::particles::{Motion, Particles};
 use glam::{DMat3, DVec3};
 use rayon::prelude::*;
@@ -187,26 +188,31 @@ impl NeighborList {
         // Wrap first, remembering the wedge turns of every particle (by id) so that the
         // history of a pair follows its particles through the faces.
         let images = domain.image_transforms();
+        let moves: Vec<(u32, i32, DMat3)> = particles
+            .position
+            .par_iter_mut()
+            .zip(particles.velocity.par_iter_mut())
+            .zip(particles.angular_velocity.par_iter_mut())
+            .zip(particles.motion.par_iter_mut())
+            .zip(particles.id.par_iter())
+            .with_min_len(PARTICLES_PER_TASK)
+            .filter_map(|((((r, v), w), motion), &id)| {
+                let k = domain.wedge_turns(*r);
+                let moved = domain.wrap(r, v, w);
+                // A rotating wall particle moved to its periodic image rotates about the
+                // image of its axis.
+                if let Motion::Rotating { center, axis, .. } = motion {
+                    *center = moved.position(*center);
+                    *axis = moved.angular_velocity(*axis);
+                }
+                moved.rotation.map(|m| (id, k, m))
+            })
+            .collect();
         let mut turns = vec![0i32; particles.len()];
-        let mut rotated = Vec::new();
-        for i in 0..particles.len() {
-            let k = domain.wedge_turns(particles.position[i]);
-            let moved = domain.wrap(
-                &mut particles.position[i],
-                &mut particles.velocity[i],
-                &mut particles.angular_velocity[i],
-            );
-            // A rotating wall particle moved to its periodic image rotates about the
-            // image of its axis.
-            if let Motion::Rotating { center, axis, .. } = &mut particles.motion[i] {
-                *center = moved.position(*center);
-                *axis = moved.angular_velocity(*axis);
-            }
-            if let Some(m) = moved.rotation {
-                let id = particles.id[i];
-                turns[id as usize] = k;
-                rotated.push((id, m));
-            }
+        let mut rotated = Vec::with_capacity(moves.len());
+        for (id, k, m) in moves {
+            turns[id as usize] = k;
+            rotated.push((id, m));
         }
         self.last_rotations = rotated;
         let old = self.history_by_key(particles, domain, &images, &turns);
@@ -230,7 +236,8 @@ impl NeighborList {
         // Stable counting sort by cell: deterministic, and neighbours end up close in memory.
         let cell_of: Vec<u32> = particles
             .position
-            .iter()
+            .par_iter()
+            .with_min_len(PARTICLES_PER_TASK)
             .map(|r| grid.cell_index(*r))
             .collect();
         let mut start = vec![0u32; grid.count() + 1];

@@ -7,7 +7,7 @@
 use crate::contact::ContactTable;
 use crate::domain::Domain;
 use crate::forces::{ForceScratch, pair_forces};
-use crate::integrate::{add_gravity, drift, kick};
+use crate::integrate::{add_gravity, drift, kick, kick_drift};
 use crate::measure::{
     ContactSums, Observables, granular_temperature, kinetic_energies, kinetic_stress_sum, to_rows,
 };
@@ -163,8 +163,7 @@ impl Simulation {
 
     /// First half of a step: half kick, drift, advance the clock.
     pub fn begin_step(&mut self) {
-        kick(&mut self.particles, 0.5 * self.dt);
-        drift(&mut self.particles, self.dt);
+        kick_drift(&mut self.particles, 0.5 * self.dt, self.dt);
         self.domain.advance(self.dt);
         if let Some(control) = &self.stress_control {
             control.apply(
