@@ -1,0 +1,295 @@
+//! What the coarse-graining reads from a simulation: particles and contacts at one instant
+//! (docs/coarse-graining.md §3).
+//!
+//! A [`Snapshot`] is assembled from plain records — [`ParticleRecord`] and
+//! [`ContactRecord`] — which are also what the snapshot files hold, so that coarse-graining a
+//! run while it goes and coarse-graining its stored snapshots afterwards run the same code on
+//! the same numbers.
+
+use super::grid::Grid;
+use crate::domain::{Domain, IDENTITY_IMAGE, IMAGE_COUNT, ImageTransform, image_offsets};
+use crate::observe::{ContactObserver, ContactView};
+use crate::particles::Particles;
+use glam::DVec3;
+use serde::{Deserialize, Serialize};
+
+/// One particle of a snapshot.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ParticleRecord {
+    /// Permanent id.
+    pub id: u32,
+    /// Centre (m).
+    pub position: DVec3,
+    /// Velocity (m/s).
+    pub velocity: DVec3,
+    /// Radius (m).
+    pub radius: f64,
+    /// Mass (kg).
+    pub mass: f64,
+    /// Whether the particle moves under its forces (wall particles do not).
+    pub free: bool,
+}
+
+impl ParticleRecord {
+    /// The records of every particle.
+    pub fn all(p: &Particles) -> Vec<ParticleRecord> {
+        (0..p.len())
+            .map(|i| ParticleRecord {
+                id: p.id[i],
+                position: p.position[i],
+                velocity: p.velocity[i],
+                radius: p.radius[i],
+                mass: p.mass[i],
+                free: p.motion[i].is_free(),
+            })
+            .collect()
+    }
+}
+
+/// One interacting pair `(i, j)` of a snapshot, with what each side needs in its own frame
+/// (the frames differ when `j` is seen through a rotated image).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ContactRecord {
+    /// Id of `i`.
+    pub i: u32,
+    /// Id of `j`, or the index of an analytic wall.
+    pub j: u32,
+    /// Whether `j` is an analytic wall.
+    pub wall: bool,
+    /// Overlap `δ` (m); negative for a pair apart that attracts.
+    pub overlap: f64,
+    /// Centre of `i` (m).
+    pub centre_i: DVec3,
+    /// Branch `r_i − r_j` through the image (m); for a wall, from the foot on the wall to
+    /// the centre.
+    pub branch: DVec3,
+    /// Contact point in `i`'s frame (m).
+    pub point_i: DVec3,
+    /// Force on `i` (N).
+    pub force_i: DVec3,
+    /// Centre of `j` in its own frame (m); for a wall, the foot.
+    pub centre_j: DVec3,
+    /// Contact point in `j`'s frame (m).
+    pub point_j: DVec3,
+    /// Force on `j` in `j`'s frame (N).
+    pub force_j: DVec3,
+}
+
+/// A contact observer that keeps every interacting pair as a [`ContactRecord`].
+#[derive(Clone, Debug, Default)]
+pub struct ContactRecords(pub Vec<ContactRecord>);
+
+impl ContactObserver for ContactRecords {
+    fn visit(&mut self, c: &ContactView<'_>) {
+        let centre_j = c.image.position_back(c.position - c.branch);
+        self.0.push(ContactRecord {
+            i: c.ids[0],
+            j: c.ids[1],
+            wall: c.wall.is_some(),
+            overlap: c.kinematics.overlap,
+            centre_i: c.position,
+            branch: c.branch,
+            point_i: c.contact_point(),
+            force_i: c.force.force,
+            centre_j,
+            point_j: c.contact_point_of_j(),
+            force_j: c.force_on_j(),
+        });
+    }
+
+    fn merge(&mut self, other: Self) {
+        self.0.extend(other.0);
+    }
+}
+
+/// A particle as the coarse-graining sees it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Body {
+    /// Centre (m).
+    pub position: DVec3,
+    /// Velocity (m/s).
+    pub velocity: DVec3,
+    /// Mass (kg).
+    pub mass: f64,
+    /// Volume (m³).
+    pub volume: f64,
+    /// Touching contacts (`δ > 0`, wall particles and walls included).
+    pub contacts: u32,
+    /// Attracting pairs apart (open bridges).
+    pub bridges: u32,
+}
+
+/// A contact's share of the stress: `f ⊗ (to − from)`, spread along the segment from
+/// `from` to `to` (m), `f` (N) the force on the particle at `to`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Segment {
+    /// Start (m).
+    pub from: DVec3,
+    /// End (m): the centre of the free particle the force acts on.
+    pub to: DVec3,
+    /// Force (N).
+    pub force: DVec3,
+}
+
+/// The free particles and contact segments of one instant, with the periodic images the
+/// grid must see them through.
+#[derive(Clone, Debug, Default)]
+pub struct Snapshot {
+    /// Time (s).
+    pub time: f64,
+    /// The free particles.
+    pub bodies: Vec<Body>,
+    /// The contacts' segments.
+    pub segments: Vec<Segment>,
+    /// Images of the domain besides the identity (translations, Lees-Edwards shifts,
+    /// wedge rotations).
+    pub images: Vec<ImageTransform>,
+}
+
+impl Snapshot {
+    /// Assembles a snapshot: only free particles count as material. A contact between two
+    /// free particles is spread along its branch; a contact of a free particle with a wall
+    /// particle or an analytic wall along the segment from the contact point to the free
+    /// particle's centre; a pair of two wall particles not at all. Particles absent from
+    /// `particles` count as walls.
+    pub fn assemble(
+        time: f64,
+        particles: &[ParticleRecord],
+        contacts: &[ContactRecord],
+        images: Vec<ImageTransform>,
+    ) -> Snapshot {
+        let max_id = particles
+            .iter()
+            .map(|p| p.id as usize + 1)
+            .max()
+            .unwrap_or(0);
+        let mut slot = vec![usize::MAX; max_id];
+        for (k, p) in particles.iter().enumerate() {
+            slot[p.id as usize] = k;
+        }
+        let free_slot = |id: u32| {
+            slot.get(id as usize)
+                .copied()
+                .filter(|&k| k != usize::MAX && particles[k].free)
+        };
+        let mut counts = vec![(0u32, 0u32); particles.len()];
+        let mut segments = Vec::with_capacity(contacts.len());
+        for c in contacts {
+            let si = free_slot(c.i);
+            let sj = if c.wall { None } else { free_slot(c.j) };
+            for s in [si, sj].into_iter().flatten() {
+                if c.overlap > 0.0 {
+                    counts[s].0 += 1;
+                } else {
+                    counts[s].1 += 1;
+                }
+            }
+            match (si, sj) {
+                (Some(_), Some(_)) => segments.push(Segment {
+                    from: c.centre_i - c.branch,
+                    to: c.centre_i,
+                    force: c.force_i,
+                }),
+                (Some(_), None) => segments.push(Segment {
+                    from: c.point_i,
+                    to: c.centre_i,
+                    force: c.force_i,
+                }),
+                (None, Some(_)) => segments.push(Segment {
+                    from: c.point_j,
+                    to: c.centre_j,
+                    force: c.force_j,
+                }),
+                (None, None) => {}
+            }
+        }
+        let bodies = particles
+            .iter()
+            .zip(&counts)
+            .filter(|(p, _)| p.free)
+            .map(|(p, &(contacts, bridges))| Body {
+                position: p.position,
+                velocity: p.velocity,
+                mass: p.mass,
+                volume: 4.0 / 3.0 * std::f64::consts::PI * p.radius.powi(3),
+                contacts,
+                bridges,
+            })
+            .collect();
+        Snapshot {
+            time,
+            bodies,
+            segments,
+            images,
+        }
+    }
+
+    /// Body `k` and those of its images that reach the grid within `reach` (m).
+    pub(crate) fn body_images<'a>(
+        &'a self,
+        k: usize,
+        grid: &'a Grid,
+        reach: f64,
+    ) -> impl Iterator<Item = Body> + 'a {
+        let b = self.bodies[k];
+        std::iter::once(&ImageTransform::IDENTITY)
+            .chain(&self.images)
+            .map(move |t| Body {
+                position: t.position(b.position),
+                velocity: t.velocity(b.velocity),
+                ..b
+            })
+            .filter(move |b| grid.reaches(b.position, reach))
+    }
+
+    /// Segment `k` and those of its images that reach the grid within `reach` (m).
+    pub(crate) fn segment_images<'a>(
+        &'a self,
+        k: usize,
+        grid: &'a Grid,
+        reach: f64,
+    ) -> impl Iterator<Item = Segment> + 'a {
+        let s = self.segments[k];
+        std::iter::once(&ImageTransform::IDENTITY)
+            .chain(&self.images)
+            .map(move |t| Segment {
+                from: t.position(s.from),
+                to: t.position(s.to),
+                force: t.vector(s.force),
+            })
+            // Every point of the segment lies within its length of its end.
+            .filter(move |s| grid.reaches(s.to, reach + (s.to - s.from).length()))
+    }
+}
+
+/// The images a grid must see a domain's particles through: none for the axisymmetric grid
+/// (its ring average covers the azimuth, and so a wedge's rotated images); a wedge's two
+/// rotations for the other grids; otherwise the translations (with the Lees-Edwards shift
+/// and velocity jump) along the periodic axes — for a slab grid only along its axis.
+pub fn images_for(domain: &Domain, grid: &Grid) -> Vec<ImageTransform> {
+    if matches!(grid, Grid::Axisymmetric { .. }) {
+        return Vec::new();
+    }
+    let all = domain.image_transforms();
+    if domain.wedge.is_some() {
+        return domain
+            .rotated_images()
+            .iter()
+            .map(|&(code, _)| all[code as usize])
+            .collect();
+    }
+    // A slab averages over the plane normal to its axis: images across that plane's
+    // periodic axes would count the same particles again.
+    let along = |a: usize| match grid {
+        Grid::Slab { axis, .. } => a == *axis,
+        _ => true,
+    };
+    (0..IMAGE_COUNT as u8)
+        .filter(|&code| code != IDENTITY_IMAGE)
+        .filter(|&code| {
+            let o = image_offsets(code);
+            (0..3).all(|a| o[a] == 0 || (domain.periodic[a] && along(a)))
+        })
+        .map(|code| all[code as usize])
+        .collect()
+}
