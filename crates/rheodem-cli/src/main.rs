@@ -1,5 +1,6 @@
 //! The `rheodem` command-line program: run a scenario, resume a run, benchmark the engine.
 
+mod cg;
 mod contact;
 mod shear;
 mod split_bottom;
@@ -59,6 +60,9 @@ enum Command {
     ShearBox(shear::ShearBoxArgs),
     /// Split-bottom ring shear cell: fill, settle, shear; wall torque and the shear band.
     SplitBottom(split_bottom::SplitBottomArgs),
+    /// Coarse-grained fields of a split-bottom run from its stored snapshots (fields.csv and
+    /// fields.vti; docs/coarse-graining.md).
+    Cg(cg::CgArgs),
     /// Run a list or grid of shear-box points (resumable), collecting one results table.
     Sweep {
         /// The sweep file (TOML); its `out` and `results` paths are relative to it.
@@ -176,6 +180,7 @@ pub(crate) fn pool(threads: Option<usize>) -> Result<(rayon::ThreadPool, usize)>
 fn run(cli: Cli) -> Result<()> {
     match cli.command {
         Command::SplitBottom(args) => split_bottom::run(args),
+        Command::Cg(args) => cg::run(args),
         Command::Run {
             scenario,
             out,

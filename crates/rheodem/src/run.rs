@@ -31,6 +31,9 @@ pub enum RunError {
     /// The scenario is invalid.
     #[error(transparent)]
     Scenario(#[from] ScenarioError),
+    /// A coarse-graining setting or a snapshot file is unusable.
+    #[error(transparent)]
+    Fields(#[from] crate::cg::CgError),
     /// A file could not be written or read.
     #[error("cannot {operation} {}: {source}", path.display())]
     Io {

@@ -233,18 +233,36 @@ impl Simulation {
     /// every step).
     pub fn compute_forces(&mut self, measure: bool) {
         if measure {
-            let (sums, loads) = self.compute_forces_with::<(ContactSums, PartLoads)>();
-            self.measured = (self.step, sums);
-            self.part_loads = loads;
-            if self.stress_control.is_some() {
-                self.update_sigma_yy(sums.stress_sum);
-            }
+            self.compute_measured_forces::<()>();
         } else if self.stress_control.is_some() {
             let StressSum(sum) = self.compute_forces_with::<StressSum>();
             self.update_sigma_yy(sum);
         } else {
             self.compute_forces_with::<()>();
         }
+    }
+
+    /// The full measurement of [`Simulation::compute_forces`], with the contacts shown to
+    /// an extra observer `O` as well, whose observations are returned.
+    fn compute_measured_forces<O: ContactObserver>(&mut self) -> O {
+        let ((sums, loads), extra) = self.compute_forces_with::<((ContactSums, PartLoads), O)>();
+        self.measured = (self.step, sums);
+        self.part_loads = loads;
+        if self.stress_control.is_some() {
+            self.update_sigma_yy(sums.stress_sum);
+        }
+        extra
+    }
+
+    /// One measured step ([`Simulation::step`] with `measure`) whose contacts an extra
+    /// observer `O` also sees (contact records for coarse-graining and snapshots); returns
+    /// its observations, taken at the positions the step ends at.
+    pub fn step_with<O: ContactObserver>(&mut self) -> Result<O, NeighborError> {
+        self.begin_step();
+        self.refresh_neighbors()?;
+        let extra = self.compute_measured_forces::<O>();
+        self.end_step();
+        Ok(extra)
     }
 
     /// Evaluates all forces and torques (pairs, walls, gravity), showing every interacting

@@ -474,7 +474,7 @@ fn the_axisymmetric_grid_equals_the_azimuthal_average_of_the_full_ring() {
                 "{name} at ({r}, {z}): (r, z) grid {got}, ring average {want}"
             );
         };
-        // The ring quadrature of 16 nodes against 4 000 azimuths: 10⁻⁶ of the value.
+        // The ring quadrature of 8 nodes against 4 000 azimuths: 10⁻⁶ of the value.
         check("ρ", got.mass, want[0], want[0], 1e-6);
         let scale = got.momentum.iter().map(|x| x.abs()).fold(0.0, f64::max);
         for c in 0..3 {

@@ -39,7 +39,7 @@ impl KernelShape {
 }
 
 /// Gauss-Legendre nodes on `[0, 1]` for the angular integral of [`Kernel::ring`].
-const RING_NODES: usize = 16;
+const RING_NODES: usize = 8;
 
 /// A kernel of a given shape and width, with its normalisation.
 #[derive(Clone, Debug)]
@@ -150,36 +150,48 @@ impl Kernel {
     /// over the azimuth. The other two carry vectors and tensors from the source's
     /// cylindrical basis into the ring point's (the `sin` moments vanish by symmetry).
     /// The integral runs over the arc `|θ| < θ_c` where the kernel is non-zero, by
-    /// Gauss-Legendre quadrature in `θ`.
+    /// Gauss-Legendre quadrature in `t = sin(θ/2)` (in `θ` when the arc exceeds about half
+    /// the circle, near the axis).
     pub fn ring(&self, r: f64, r_s: f64, dz: f64, angle: f64) -> [f64; 3] {
         let c = self.cutoff;
         let base = (r - r_s) * (r - r_s) + dz * dz;
         if base >= c * c {
             return [0.0; 3];
         }
-        // d² = base + 2 r r_s (1 − cos θ) < c²  ⇔  1 − cos θ < (c² − base) / (2 r r_s).
-        let two_rr = 2.0 * r * r_s;
-        let theta_c = if two_rr <= 0.0 {
+        // d² = base + 4 r r_s t², t = sin(θ/2); the arc ends where d = c.
+        let four_rr = 4.0 * r * r_s;
+        let reach = c * c - base;
+        let mut sums = [0.0; 3];
+        if reach < 0.81 * four_rr {
+            // An arc short of half the circle (t_c < 0.9): in t, dθ = 2 dt / √(1 − t²),
+            // cos θ = 1 − 2t², a smooth integrand without trigonometric calls.
+            let t_c = (reach / four_rr).sqrt();
+            for &(x, wt) in &self.ring_rule {
+                let t2 = (x * t_c) * (x * t_c);
+                let v = wt * self.value(base + four_rr * t2) * 2.0 / (1.0 - t2).sqrt();
+                let cos1 = 1.0 - 2.0 * t2;
+                sums[0] += v;
+                sums[1] += v * cos1;
+                sums[2] += v * (2.0 * cos1 * cos1 - 1.0);
+            }
+            // Both halves of the arc, over the angle the particles fill.
+            return sums.map(|s| s * 2.0 * t_c / angle);
+        }
+        // Near the axis the arc may close into the whole circle: integrate in θ.
+        let theta_c = if reach >= four_rr {
             PI
         } else {
-            let q = 1.0 - (c * c - base) / two_rr;
-            if q <= -1.0 { PI } else { q.acos() }
+            2.0 * (reach / four_rr).sqrt().asin()
         };
-        let mut sums = [0.0; 3];
         for &(x, wt) in &self.ring_rule {
-            let theta = x * theta_c;
-            let (s, co) = (0.5 * theta).sin_cos();
-            // 1 − cos θ = 2 sin²(θ/2), accurate for small θ.
-            let d2 = base + two_rr * 2.0 * s * s;
-            let v = wt * self.value(d2);
-            let cos1 = co * co - s * s;
+            let (sn, co) = (0.5 * x * theta_c).sin_cos();
+            let v = wt * self.value(base + four_rr * sn * sn);
+            let cos1 = co * co - sn * sn;
             sums[0] += v;
             sums[1] += v * cos1;
             sums[2] += v * (2.0 * cos1 * cos1 - 1.0);
         }
-        // Both halves of the arc, over the angle the particles fill.
-        let scale = 2.0 * theta_c / angle;
-        sums.map(|s| s * scale)
+        sums.map(|s| s * 2.0 * theta_c / angle)
     }
 }
 

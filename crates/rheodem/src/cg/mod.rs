@@ -15,6 +15,7 @@ pub mod fields;
 pub mod grid;
 pub mod kernel;
 pub mod output;
+pub mod shear_band;
 pub mod snapshot;
 pub mod sums;
 

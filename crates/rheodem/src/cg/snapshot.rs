@@ -293,3 +293,157 @@ pub fn images_for(domain: &Domain, grid: &Grid) -> Vec<ImageTransform> {
         .map(|code| all[code as usize])
         .collect()
 }
+
+/// Columns of a particle file (`snapshot-N.particles.csv`).
+pub const PARTICLE_COLUMNS: &str = "id,x,y,z,vx,vy,vz,radius,mass,free";
+
+/// Columns of a contact file (`snapshot-N.contacts.csv`): ids, whether `j` is an analytic
+/// wall, the overlap, then `i`'s centre, branch, contact point and force, and `j`'s centre,
+/// contact point and force in its own frame.
+pub const CONTACT_COLUMNS: &str = "i,j,wall,overlap,xi,yi,zi,bx,by,bz,cix,ciy,ciz,fix,fiy,fiz,\
+                                   xj,yj,zj,cjx,cjy,cjz,fjx,fjy,fjz";
+
+fn push_vec(row: &mut Vec<String>, v: DVec3) {
+    row.extend(v.to_array().iter().map(|x| format!("{x:e}")));
+}
+
+/// The particle records as CSV, every number written so that it reads back exactly.
+pub fn particles_csv(records: &[ParticleRecord]) -> String {
+    let mut out = format!("{PARTICLE_COLUMNS}\n");
+    for p in records {
+        let mut row = vec![p.id.to_string()];
+        push_vec(&mut row, p.position);
+        push_vec(&mut row, p.velocity);
+        row.push(format!("{:e}", p.radius));
+        row.push(format!("{:e}", p.mass));
+        row.push(u8::from(p.free).to_string());
+        out.push_str(&row.join(","));
+        out.push('\n');
+    }
+    out
+}
+
+/// The contact records as CSV, every number written so that it reads back exactly.
+pub fn contacts_csv(records: &[ContactRecord]) -> String {
+    let mut out = format!("{CONTACT_COLUMNS}\n");
+    for c in records {
+        let mut row = vec![
+            c.i.to_string(),
+            c.j.to_string(),
+            u8::from(c.wall).to_string(),
+            format!("{:e}", c.overlap),
+        ];
+        for v in [
+            c.centre_i, c.branch, c.point_i, c.force_i, c.centre_j, c.point_j, c.force_j,
+        ] {
+            push_vec(&mut row, v);
+        }
+        out.push_str(&row.join(","));
+        out.push('\n');
+    }
+    out
+}
+
+/// Splits the rows of a CSV text with the given header into numbers, naming the file
+/// (`what`), the line and the field of the first one that is not a number.
+fn rows(text: &str, header: &str, what: &str) -> Result<Vec<Vec<f64>>, super::CgError> {
+    let bad = |m: String| super::CgError::Invalid(format!("{what}: {m}"));
+    let mut lines = text.lines();
+    match lines.next() {
+        Some(h) if h.trim() == header => {}
+        other => {
+            return Err(bad(format!(
+                "the first line must be the header `{header}`, found `{}`",
+                other.unwrap_or("")
+            )));
+        }
+    }
+    let width = header.split(',').count();
+    lines
+        .enumerate()
+        .filter(|(_, l)| !l.trim().is_empty())
+        .map(|(k, l)| {
+            let fields: Vec<&str> = l.split(',').collect();
+            if fields.len() != width {
+                return Err(bad(format!(
+                    "line {} has {} fields, the header {width}",
+                    k + 2,
+                    fields.len()
+                )));
+            }
+            fields
+                .iter()
+                .zip(header.split(','))
+                .map(|(f, name)| {
+                    f.trim().parse::<f64>().map_err(|_| {
+                        bad(format!("line {}: `{name}` is not a number: `{f}`", k + 2))
+                    })
+                })
+                .collect()
+        })
+        .collect()
+}
+
+/// Field `k` of a row as an id, which must be a whole number in `u32`'s range.
+fn id_at(r: &[f64], k: usize, what: &str) -> Result<u32, super::CgError> {
+    let x = r[k];
+    if x.fract() == 0.0 && (0.0..=f64::from(u32::MAX)).contains(&x) {
+        Ok(x as u32)
+    } else {
+        Err(super::CgError::Invalid(format!(
+            "{what}: an id must be a whole number from 0 to {}, got {x}",
+            u32::MAX
+        )))
+    }
+}
+
+fn vec_at(r: &[f64], k: usize) -> DVec3 {
+    DVec3::new(r[k], r[k + 1], r[k + 2])
+}
+
+/// Reads the particle records of a file written by [`particles_csv`]; `what` names the file
+/// in errors.
+///
+/// # Errors
+/// [`super::CgError::Invalid`] naming the line and field of the first bad value.
+pub fn read_particles_csv(text: &str, what: &str) -> Result<Vec<ParticleRecord>, super::CgError> {
+    rows(text, PARTICLE_COLUMNS, what)?
+        .into_iter()
+        .map(|r| {
+            Ok(ParticleRecord {
+                id: id_at(&r, 0, what)?,
+                position: vec_at(&r, 1),
+                velocity: vec_at(&r, 4),
+                radius: r[7],
+                mass: r[8],
+                free: r[9] != 0.0,
+            })
+        })
+        .collect()
+}
+
+/// Reads the contact records of a file written by [`contacts_csv`]; `what` names the file
+/// in errors.
+///
+/// # Errors
+/// [`super::CgError::Invalid`] naming the line and field of the first bad value.
+pub fn read_contacts_csv(text: &str, what: &str) -> Result<Vec<ContactRecord>, super::CgError> {
+    rows(text, CONTACT_COLUMNS, what)?
+        .into_iter()
+        .map(|r| {
+            Ok(ContactRecord {
+                i: id_at(&r, 0, what)?,
+                j: id_at(&r, 1, what)?,
+                wall: r[2] != 0.0,
+                overlap: r[3],
+                centre_i: vec_at(&r, 4),
+                branch: vec_at(&r, 7),
+                point_i: vec_at(&r, 10),
+                force_i: vec_at(&r, 13),
+                centre_j: vec_at(&r, 16),
+                point_j: vec_at(&r, 19),
+                force_j: vec_at(&r, 22),
+            })
+        })
+        .collect()
+}

@@ -3,4 +3,5 @@
 pub mod compare;
 pub mod shear_box;
 pub mod split_bottom;
+pub mod split_bottom_fields;
 pub mod sweep;

@@ -17,9 +17,11 @@
 //!    and surface height are recorded, and the azimuthal velocity profile is averaged in
 //!    three horizontal slabs over the averaging window and fitted with an error function.
 
+use super::split_bottom_fields::{self as cell_fields, FieldSettings};
 use crate::Simulation;
 use crate::analysis::{Estimate, block_average};
 use crate::band::{AzimuthalProfile, ErfFit, erf_profile, surface_height};
+use crate::cg::{CgSums, ContactRecord, ContactRecords, KernelShape};
 use crate::contact::{Adhesion, ContactLaw, ContactTable, Damping, NormalLaw, Resistance};
 use crate::domain::Domain;
 use crate::generate::{Rng, polydisperse_radii};
@@ -146,6 +148,15 @@ pub struct SplitBottomSpec {
     pub skin: f64,
     /// Random seed of the filling.
     pub seed: u64,
+    /// Coarse-graining kernel of the fields (docs/coarse-graining.md).
+    pub cg_kernel: KernelShape,
+    /// Kernel width `w` in units of `d_p`.
+    pub cg_width: f64,
+    /// Spacing of the `(r, z)` grid of the fields in units of `d_p`.
+    pub cg_spacing: f64,
+    /// Time between the samples of the fields in the averaging window (s); 0 for no
+    /// fields.
+    pub cg_every: f64,
 }
 
 impl Default for SplitBottomSpec {
@@ -179,6 +190,10 @@ impl Default for SplitBottomSpec {
             checkpoints: 8,
             skin: 0.1,
             seed: 1,
+            cg_kernel: KernelShape::Lucy,
+            cg_width: 1.0,
+            cg_spacing: 0.5,
+            cg_every: 0.1,
         }
     }
 }
@@ -371,6 +386,10 @@ pub struct SplitBottomRun {
     /// throughput counts the steps since.
     #[serde(default)]
     pub first_step: u64,
+    /// Kernel sums of the coarse-grained fields over the averaging window so far (none
+    /// before shear, or with `cg_every = 0`).
+    #[serde(default)]
+    pub fields: Option<CgSums>,
     #[serde(skip)]
     lock: Option<Arc<DirLock>>,
 }
@@ -469,6 +488,9 @@ impl SplitBottomSpec {
         non_negative("gravity", self.gravity)?;
         positive("settle_damping", self.settle_damping)?;
         positive("skin", self.skin)?;
+        positive("cg_width", self.cg_width)?;
+        positive("cg_spacing", self.cg_spacing)?;
+        non_negative("cg_every", self.cg_every)?;
         positive("settle_kinetic_ratio", self.settle_kinetic_ratio)?;
         positive("settle_max_time", self.settle_max_time)?;
         positive("duration", self.duration)?;
@@ -747,6 +769,7 @@ impl SplitBottomRun {
             wall_seconds: 0.0,
             from: None,
             first_step: 0,
+            fields: None,
             lock: Some(lock),
         };
         run.write_spec(dir)?;
@@ -815,6 +838,7 @@ impl SplitBottomRun {
             snapshots: Vec::new(),
             wall_seconds: 0.0,
             first_step: source.simulation.step,
+            fields: None,
             ..source
         };
         run.begin_shear()?;
@@ -893,7 +917,22 @@ impl SplitBottomRun {
                     let next = self.simulation.step + 1 - s0;
                     let row_every = (total / self.spec.rows).max(1);
                     let measure = next.is_multiple_of(row_every) || next == total;
-                    self.simulation.step(measure)?;
+                    let snap_every = total.checked_div(self.spec.snapshots).unwrap_or(0);
+                    let snap_now = snap_every > 0 && next.is_multiple_of(snap_every);
+                    let in_window = self.simulation.time + dt - t0 >= self.spec.average_from;
+                    let cg_now = in_window
+                        && self.fields.is_some()
+                        && self.cg_steps().is_some_and(|k| next.is_multiple_of(k));
+                    // Steps whose contacts are coarse-grained or stored keep their records.
+                    let contacts = if cg_now || snap_now {
+                        Some(self.simulation.step_with::<ContactRecords>()?.0)
+                    } else {
+                        self.simulation.step(measure)?;
+                        None
+                    };
+                    if cg_now {
+                        self.sample_fields(contacts.as_deref().unwrap_or_default())?;
+                    }
                     if measure {
                         self.sane()?;
                         let row = self.row();
@@ -902,9 +941,8 @@ impl SplitBottomRun {
                         }
                         self.rows.push(row);
                     }
-                    let snap_every = total.checked_div(self.spec.snapshots).unwrap_or(0);
-                    if snap_every > 0 && next.is_multiple_of(snap_every) {
-                        self.snapshot(dir)?;
+                    if snap_now {
+                        self.snapshot(dir, contacts.as_deref().unwrap_or_default())?;
                     }
                     let ck_every = total.checked_div(self.spec.checkpoints).unwrap_or(0);
                     if next == total {
@@ -1028,6 +1066,11 @@ impl SplitBottomRun {
             .map(|&(lo, hi)| AzimuthalProfile::new(g.inner_radius, g.outer_radius, bins, lo, hi))
             .collect::<Result<_, _>>()
             .map_err(|e| RunError::Scenario(invalid("height", h, e.to_string())))?;
+        self.fields = if self.spec.cg_every > 0.0 {
+            Some(CgSums::new(FieldSettings::of(&self.spec).grid(self)?)?)
+        } else {
+            None
+        };
         Ok(())
     }
 
@@ -1152,7 +1195,24 @@ impl SplitBottomRun {
         self.write_outputs(dir)
     }
 
-    fn snapshot(&mut self, dir: &Path) -> Result<(), RunError> {
+    /// Steps between samples of the fields, `cg_every / dt` rounded (at least 1); `None`
+    /// without fields.
+    fn cg_steps(&self) -> Option<u64> {
+        (self.spec.cg_every > 0.0)
+            .then(|| ((self.spec.cg_every / self.simulation.dt).round() as u64).max(1))
+    }
+
+    /// Adds the current state, with the contacts of its last step, to the fields.
+    fn sample_fields(&mut self, contacts: &[ContactRecord]) -> Result<(), RunError> {
+        let kernel = FieldSettings::of(&self.spec).kernel(self.spec.diameter)?;
+        let snap = cell_fields::snapshot(self, contacts);
+        if let Some(sums) = &mut self.fields {
+            sums.add_snapshot(&kernel, &snap);
+        }
+        Ok(())
+    }
+
+    fn snapshot(&mut self, dir: &Path, contacts: &[ContactRecord]) -> Result<(), RunError> {
         let p = &self.simulation.particles;
         let v_phi: Vec<f64> = (0..p.len())
             .map(|i| {
@@ -1169,8 +1229,9 @@ impl SplitBottomRun {
         let path = dir.join("snapshots").join(&name);
         write_atomic(&path, vtk::particles_vtp(p, &[("v_phi", v_phi)]).as_bytes())
             .map_err(io_err("write", &path))?;
-        self.snapshots
-            .push((self.simulation.time, format!("snapshots/{name}")));
+        let vtp = format!("snapshots/{name}");
+        cell_fields::write_records(self, contacts, dir, &vtp)?;
+        self.snapshots.push((self.simulation.time, vtp));
         let path = dir.join("snapshots.pvd");
         write_atomic(&path, vtk::collection_pvd(&self.snapshots).as_bytes())
             .map_err(io_err("write", &path))
@@ -1221,6 +1282,15 @@ impl SplitBottomRun {
         }
         let path = dir.join("band.csv");
         write_atomic(&path, band.as_bytes()).map_err(io_err("write", &path))?;
+        let band = match self.fields.as_ref().filter(|s| s.snapshots > 0) {
+            Some(sums) => {
+                cell_fields::write_fields(sums, &self.spec, dir)?;
+                let band = cell_fields::band_rheology(self, sums);
+                cell_fields::write_band(&band, dir)?;
+                Some(band)
+            }
+            None => None,
+        };
 
         let summary = serde_json::json!({
             "program": "rheodem split-bottom",
@@ -1246,6 +1316,24 @@ impl SplitBottomRun {
             "parts": PARTS,
             "settled": self.settled,
             "results": (self.stage != Stage::Settle).then(|| self.results()),
+            "fields": self.fields.as_ref().map(|f| serde_json::json!({
+                "samples": f.snapshots,
+                "grid": f.grid,
+                "kernel": self.spec.cg_kernel,
+                "width": self.spec.cg_width * self.spec.diameter,
+            })),
+            "band_rheology": band.as_ref().map(|b| serde_json::json!({
+                "pressure_min": b.pressure_min,
+                "points": b.points.len(),
+                "fit": b.fit,
+                "cohesion_scaled": b.cohesion_scaled,
+                "pressure_avg": b.pressure_avg,
+                "torque_factor": b.torque_factor,
+                "torque_macro": b.torque_macro,
+                "torque_measured": self.results().net_torque.map(|e| e.mean),
+                "cohesion_from_torque": b.fit.zip(self.results().net_torque).map(|(f, t)|
+                    t.mean / b.torque_factor - f.slope * b.pressure_avg),
+            })),
         });
         let path = dir.join("summary.json");
         let text = serde_json::to_string_pretty(&summary).unwrap_or_default();

@@ -1,0 +1,290 @@
+//! Coarse-grained fields of the split-bottom cell (docs/coarse-graining.md): the
+//! axisymmetric `(r, z)` grid over the cell, sampled while the run goes through its
+//! averaging window, and the same fields from the run's stored snapshots afterwards
+//! ([`offline_fields`]).
+
+use super::split_bottom::{SplitBottomRun, SplitBottomSpec};
+use crate::cg::shear_band::{
+    BandAtHeight, LinearFit, RheologyPoint, band_by_height, band_points, fit_friction_line,
+};
+use crate::cg::snapshot::{contacts_csv, particles_csv, read_contacts_csv, read_particles_csv};
+use crate::cg::{
+    CgError, CgSums, ContactRecord, Grid, Kernel, KernelShape, Material, ParticleRecord, Snapshot,
+    fields,
+};
+use crate::io::atomic::write_atomic;
+use crate::run::{RunError, io_err, read_checkpoint};
+use std::path::{Path, PathBuf};
+
+/// How the cell's fields are coarse-grained (the `cg_*` keys of the spec).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FieldSettings {
+    /// Kernel shape.
+    pub kernel: KernelShape,
+    /// Kernel width in units of `d_p`.
+    pub width: f64,
+    /// Grid spacing in units of `d_p`.
+    pub spacing: f64,
+}
+
+impl FieldSettings {
+    /// The settings of a spec.
+    pub fn of(spec: &SplitBottomSpec) -> FieldSettings {
+        FieldSettings {
+            kernel: spec.cg_kernel,
+            width: spec.cg_width,
+            spacing: spec.cg_spacing,
+        }
+    }
+
+    /// The kernel (width `width · d_p`).
+    ///
+    /// # Errors
+    /// [`CgError::Invalid`] for a width that is not positive.
+    pub fn kernel(&self, diameter: f64) -> Result<Kernel, CgError> {
+        Kernel::new(self.kernel, self.width * diameter)
+    }
+
+    /// The `(r, z)` grid over the cell of a run: `R_i ≤ r ≤ R_o`, from the bottom to a
+    /// diameter above the settled surface, cells of `spacing · d_p`.
+    ///
+    /// # Errors
+    /// [`CgError::Invalid`] for a spacing that is not positive or a grid too large.
+    pub fn grid(&self, run: &SplitBottomRun) -> Result<Grid, CgError> {
+        let d = run.spec.diameter;
+        if !(self.spacing.is_finite() && self.spacing > 0.0) {
+            return Err(CgError::Invalid(format!(
+                "the grid spacing (cg_spacing) must be > 0 diameters, got {}",
+                self.spacing
+            )));
+        }
+        let g = &run.geometry;
+        let top = run.settled.as_ref().map_or(g.height, |s| s.surface_height) + d;
+        let h = self.spacing * d;
+        let cells = |len: f64| ((len / h).ceil() as usize).max(1);
+        let grid = Grid::Axisymmetric {
+            r: [g.inner_radius, g.outer_radius],
+            z: [0.0, top],
+            bins: [cells(g.outer_radius - g.inner_radius), cells(top)],
+            angle: g.angle,
+        };
+        grid.validate()?;
+        Ok(grid)
+    }
+}
+
+/// The particle-scale constants of a spec for the local `I`, `p*` and `Bo`: `f_a^max` of
+/// a pair of mean particles.
+pub fn material(spec: &SplitBottomSpec) -> Material {
+    let a = 0.5 * spec.diameter;
+    Material {
+        diameter: spec.diameter,
+        particle_density: spec.density,
+        stiffness: spec.stiffness,
+        max_adhesion: spec.law().adhesion.max_force(a, a),
+    }
+}
+
+/// The snapshot of the run's current state, with the contacts of its last step.
+pub fn snapshot(run: &SplitBottomRun, contacts: &[ContactRecord]) -> Snapshot {
+    let p = &run.simulation.particles;
+    Snapshot::assemble(
+        run.simulation.time,
+        &ParticleRecord::all(p),
+        contacts,
+        Vec::new(),
+    )
+}
+
+/// The files holding a stored snapshot's particles and contacts, next to its `.vtp` file.
+pub fn record_paths(dir: &Path, vtp: &str) -> (PathBuf, PathBuf) {
+    let stem = vtp.strip_suffix(".vtp").unwrap_or(vtp);
+    (
+        dir.join(format!("{stem}.particles.csv")),
+        dir.join(format!("{stem}.contacts.csv")),
+    )
+}
+
+/// Writes the particle and contact records of the run's current state next to the snapshot
+/// `vtp` (a path relative to `dir`).
+pub fn write_records(
+    run: &SplitBottomRun,
+    contacts: &[ContactRecord],
+    dir: &Path,
+    vtp: &str,
+) -> Result<(), RunError> {
+    let (pp, cp) = record_paths(dir, vtp);
+    let particles = particles_csv(&ParticleRecord::all(&run.simulation.particles));
+    write_atomic(&pp, particles.as_bytes()).map_err(io_err("write", &pp))?;
+    write_atomic(&cp, contacts_csv(contacts).as_bytes()).map_err(io_err("write", &cp))
+}
+
+/// Writes `fields.csv` and `fields.vti` of `sums` into `dir`.
+pub fn write_fields(sums: &CgSums, spec: &SplitBottomSpec, dir: &Path) -> Result<(), RunError> {
+    let points = fields(sums, Some(&material(spec)));
+    let csv = dir.join("fields.csv");
+    write_atomic(
+        &csv,
+        crate::cg::output::to_csv(&sums.grid, &points).as_bytes(),
+    )
+    .map_err(io_err("write", &csv))?;
+    let vti = dir.join("fields.vti");
+    write_atomic(
+        &vti,
+        crate::cg::output::to_vti(&sums.grid, &points).as_bytes(),
+    )
+    .map_err(io_err("write", &vti))
+}
+
+/// The state of the run in `dir` as of its last checkpoint, read without locking or
+/// changing the directory.
+///
+/// # Errors
+/// [`RunError`] when the checkpoint cannot be read.
+pub fn read_run(dir: &Path) -> Result<SplitBottomRun, RunError> {
+    read_checkpoint(&dir.join("checkpoint.bin"))
+}
+
+/// The fields of the run in `dir` (read by [`read_run`]) from its stored snapshots in the
+/// averaging window, with `settings`.
+///
+/// # Errors
+/// [`RunError`] when a snapshot's record files cannot be read, or the settings are out of
+/// range.
+pub fn offline_fields(
+    dir: &Path,
+    run: &SplitBottomRun,
+    settings: FieldSettings,
+) -> Result<CgSums, RunError> {
+    let kernel = settings.kernel(run.spec.diameter)?;
+    let mut sums = CgSums::new(settings.grid(run)?)?;
+    let t0 = run.shear_start.map_or(f64::INFINITY, |s| s.0);
+    for (time, vtp) in &run.snapshots {
+        if time - t0 < run.spec.average_from {
+            continue;
+        }
+        let (pp, cp) = record_paths(dir, vtp);
+        let read = |p: &Path| std::fs::read_to_string(p).map_err(io_err("read", p));
+        let particles = read_particles_csv(&read(&pp)?, &pp.display().to_string())?;
+        let contacts = read_contacts_csv(&read(&cp)?, &cp.display().to_string())?;
+        sums.add_snapshot(
+            &kernel,
+            &Snapshot::assemble(*time, &particles, &contacts, Vec::new()),
+        );
+    }
+    Ok(sums)
+}
+
+/// Lowest pressure, in units of `f_g / d_p²`, of the band points fitted by `τ = μ P + c`
+/// (Roy et al. 2016 leave out `P* < 4.42`, where the data bend away from the line).
+pub const BAND_PRESSURE_MIN_SCALED: f64 = 4.42;
+
+/// The shear band of the fields and its local rheology, with the torque it implies.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct BandRheology {
+    /// The band per height.
+    pub heights: Vec<BandAtHeight>,
+    /// The rheology points of the centre regions.
+    pub points: Vec<RheologyPoint>,
+    /// Lowest pressure fitted (Pa).
+    pub pressure_min: f64,
+    /// `τ = μ P + c` over the points above `pressure_min`, if there are enough.
+    pub fit: Option<LinearFit>,
+    /// The cohesion `c* = c d_p² / f_g`.
+    pub cohesion_scaled: Option<f64>,
+    /// Mean pressure of the fitted points `P_avg` (Pa).
+    pub pressure_avg: f64,
+    /// The factor `M = 2πH(R_o² − R_i²) + (2/3)π(R_o³ + R_i³ − 2R_s³)` (m³) of the
+    /// macroscopic torque (Roy et al. 2016, Eq. 26), `H` the settled height.
+    pub torque_factor: f64,
+    /// The macroscopic torque `T_macro = M (μ P_avg + c)` of the full ring (N m).
+    pub torque_macro: Option<f64>,
+}
+
+/// The band and its rheology from `sums`' fields (Roy et al. 2016, Sects. 3.1–3.2).
+pub fn band_rheology(run: &SplitBottomRun, sums: &CgSums) -> BandRheology {
+    let spec = &run.spec;
+    let points = fields(sums, Some(&material(spec)));
+    let heights = band_by_height(&sums.grid, &points, spec.omega, 0.8);
+    let band = band_points(&sums.grid, &points, &heights);
+    let d = spec.diameter;
+    let weight = spec.groups(&run.geometry, run.simulation.dt).weight;
+    let pressure_min = BAND_PRESSURE_MIN_SCALED * weight / (d * d);
+    let fit = fit_friction_line(&band, pressure_min);
+    let used: Vec<f64> = band
+        .iter()
+        .filter(|p| p.pressure >= pressure_min)
+        .map(|p| p.pressure)
+        .collect();
+    let pressure_avg = used.iter().sum::<f64>() / used.len().max(1) as f64;
+    let g = &run.geometry;
+    let h = run.settled.as_ref().map_or(g.height, |s| s.surface_height);
+    let (ro, ri, rs) = (g.outer_radius, g.inner_radius, g.split_radius);
+    let torque_factor = 2.0 * std::f64::consts::PI * h * (ro * ro - ri * ri)
+        + 2.0 / 3.0 * std::f64::consts::PI * (ro.powi(3) + ri.powi(3) - 2.0 * rs.powi(3));
+    BandRheology {
+        cohesion_scaled: fit.map(|f| f.intercept * d * d / weight),
+        torque_macro: fit.map(|f| torque_factor * (f.slope * pressure_avg + f.intercept)),
+        heights,
+        points: band,
+        pressure_min,
+        fit,
+        pressure_avg,
+        torque_factor,
+    }
+}
+
+/// Writes `band-heights.csv` (the band per height) and `band-points.csv` (its rheology
+/// points) into `dir`.
+pub fn write_band(band: &BandRheology, dir: &Path) -> Result<(), RunError> {
+    let mut s = String::from(
+        "z,max_strain_rate,r_at_max,centre_r_lo,centre_r_hi,erf_centre,erf_centre_err,\
+         erf_width,erf_width_err,gauss_centre,gauss_centre_err,gauss_sigma,gauss_sigma_err\n",
+    );
+    for b in &band.heights {
+        let e = b.erf.as_ref().ok();
+        let g = b.gauss.as_ref().ok();
+        let nan = f64::NAN;
+        let cols = [
+            b.z,
+            b.max_strain_rate,
+            b.r_at_max,
+            b.centre_region[0],
+            b.centre_region[1],
+            e.map_or(nan, |e| e.centre),
+            e.map_or(nan, |e| e.centre_err),
+            e.map_or(nan, |e| e.width),
+            e.map_or(nan, |e| e.width_err),
+            g.map_or(nan, |g| g.centre),
+            g.map_or(nan, |g| g.centre_err),
+            g.map_or(nan, |g| g.sigma),
+            g.map_or(nan, |g| g.sigma_err),
+        ];
+        let row: Vec<String> = cols.iter().map(|x| format!("{x:e}")).collect();
+        s.push_str(&row.join(","));
+        s.push('\n');
+    }
+    let path = dir.join("band-heights.csv");
+    write_atomic(&path, s.as_bytes()).map_err(io_err("write", &path))?;
+    let mut s = String::from("r,z,I,pstar,Bo,phi,mu,tau,P,strain_rate,Z\n");
+    for p in &band.points {
+        let cols = [
+            p.r,
+            p.z,
+            p.inertial_number,
+            p.softness,
+            p.bond_number,
+            p.volume_fraction,
+            p.friction,
+            p.shear_stress,
+            p.pressure,
+            p.strain_rate,
+            p.coordination,
+        ];
+        let row: Vec<String> = cols.iter().map(|x| format!("{x:e}")).collect();
+        s.push_str(&row.join(","));
+        s.push('\n');
+    }
+    let path = dir.join("band-points.csv");
+    write_atomic(&path, s.as_bytes()).map_err(io_err("write", &path))
+}
