@@ -255,7 +255,12 @@ fn small_wet_cell_fields_on_the_fly_equal_offline() {
     let live = run.fields.clone().expect("fields");
     // Snapshots at 0.02, 0.04, 0.06, 0.08 s of shear; the window starts at 0.03 s.
     assert_eq!(live.snapshots, 3);
-    for f in ["fields.csv", "fields.vti", "band-heights.csv", "band-points.csv"] {
+    for f in [
+        "fields.csv",
+        "fields.vti",
+        "band-heights.csv",
+        "band-points.csv",
+    ] {
         assert!(dir.join(f).exists(), "{f} missing");
     }
 
