@@ -13,6 +13,7 @@ use crate::cg::{
     fields,
 };
 use crate::io::atomic::write_atomic;
+use crate::plot::{Labels, Markers, Series, plot_svg};
 use crate::run::{RunError, io_err, read_checkpoint};
 use std::path::{Path, PathBuf};
 
@@ -286,5 +287,47 @@ pub fn write_band(band: &BandRheology, dir: &Path) -> Result<(), RunError> {
         s.push('\n');
     }
     let path = dir.join("band-points.csv");
-    write_atomic(&path, s.as_bytes()).map_err(io_err("write", &path))
+    write_atomic(&path, s.as_bytes()).map_err(io_err("write", &path))?;
+    write_band_figure(band, dir)
+}
+
+/// `band-rheology.svg`: `τ` against `P` of the band points, with the fitted line over the
+/// fitted range.
+fn write_band_figure(band: &BandRheology, dir: &Path) -> Result<(), RunError> {
+    let points: Vec<(f64, f64, f64)> = band
+        .points
+        .iter()
+        .filter(|p| p.pressure.is_finite() && p.shear_stress.is_finite())
+        .map(|p| (p.pressure, p.shear_stress, 0.0))
+        .collect();
+    if points.is_empty() {
+        return Ok(());
+    }
+    let top = points.iter().map(|p| p.0).fold(0.0, f64::max);
+    let line: Vec<(f64, f64)> = band
+        .fit
+        .iter()
+        .flat_map(|f| [band.pressure_min, top].map(|p| (p, f.slope * p + f.intercept)))
+        .collect();
+    let label = band.fit.map_or("no fit (too few points)".to_string(), |f| {
+        format!("τ = {:.3} P + {:.3} Pa", f.slope, f.intercept)
+    });
+    let svg = plot_svg(
+        &Labels {
+            title: "Shear band: shear stress against pressure",
+            x: "pressure P (Pa)",
+            y: "shear stress τ (Pa)",
+        },
+        &[Series {
+            label: &label,
+            points: &line,
+        }],
+        &[Markers {
+            label: "band centre points",
+            points: &points,
+        }],
+    )
+    .map_err(|e| RunError::Scenario(crate::scenario::invalid("figure", "band-rheology.svg", e)))?;
+    let path = dir.join("band-rheology.svg");
+    write_atomic(&path, svg.as_bytes()).map_err(io_err("write", &path))
 }
