@@ -195,6 +195,27 @@ fn bad_geometry_gets_specific_errors() {
             },
             "`average_from`",
         ),
+        (
+            SplitBottomSpec {
+                cg_width: 0.0,
+                ..base.clone()
+            },
+            "`cg_width` = 0",
+        ),
+        (
+            SplitBottomSpec {
+                cg_spacing: -1.0,
+                ..base.clone()
+            },
+            "`cg_spacing` = -1",
+        ),
+        (
+            SplitBottomSpec {
+                cg_every: f64::NAN,
+                ..base.clone()
+            },
+            "`cg_every`",
+        ),
     ];
     for (spec, expected) in cases {
         let e = error_of(spec);

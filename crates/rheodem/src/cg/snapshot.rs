@@ -447,3 +447,70 @@ pub fn read_contacts_csv(text: &str, what: &str) -> Result<Vec<ContactRecord>, s
         })
         .collect()
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn contact(i: u32) -> ContactRecord {
+        let v = |k: f64| DVec3::new(k, -k / 3.0, 1e-300 * k);
+        ContactRecord {
+            i,
+            j: i + 7,
+            wall: i.is_multiple_of(2),
+            overlap: -1.25e-5,
+            centre_i: v(1.0),
+            branch: v(0.1),
+            point_i: v(0.7),
+            force_i: v(std::f64::consts::PI),
+            centre_j: v(2.0),
+            point_j: v(0.3),
+            force_j: v(-std::f64::consts::E),
+        }
+    }
+
+    #[test]
+    fn records_read_back_exactly() {
+        let contacts: Vec<ContactRecord> = (0..5).map(contact).collect();
+        let back = read_contacts_csv(&contacts_csv(&contacts), "c.csv").expect("read");
+        assert_eq!(back, contacts);
+        let particles = vec![ParticleRecord {
+            id: 3,
+            position: DVec3::new(0.1, 0.2, 1.0 / 3.0),
+            velocity: DVec3::new(-1e-17, 0.0, 2.5),
+            radius: 1.1e-3,
+            mass: 1.0 / 7.0,
+            free: false,
+        }];
+        let back = read_particles_csv(&particles_csv(&particles), "p.csv").expect("read");
+        assert_eq!(back, particles);
+    }
+
+    #[test]
+    fn bad_records_name_the_file_line_and_field() {
+        let good = particles_csv(&[ParticleRecord {
+            id: 0,
+            position: DVec3::ZERO,
+            velocity: DVec3::ZERO,
+            radius: 1.0,
+            mass: 1.0,
+            free: true,
+        }]);
+        let bad = good.replacen(",1e0,1e0,1", ",x,1e0,1", 1);
+        let e = read_particles_csv(&bad, "p.csv")
+            .expect_err("bad radius")
+            .to_string();
+        assert!(
+            e.contains("p.csv") && e.contains("line 2") && e.contains("`radius`"),
+            "{e}"
+        );
+        let e = read_particles_csv("id,x\n", "p.csv")
+            .expect_err("header")
+            .to_string();
+        assert!(e.contains("header"), "{e}");
+        let e = read_particles_csv(&good.replacen("\n0,", "\n-2,", 1), "p.csv")
+            .expect_err("negative id")
+            .to_string();
+        assert!(e.contains("whole number"), "{e}");
+    }
+}
