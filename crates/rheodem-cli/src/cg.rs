@@ -4,7 +4,7 @@ use anyhow::{Context, Result};
 use clap::Args;
 use rheodem::cg::KernelShape;
 use rheodem::setups::split_bottom_fields::{
-    FieldSettings, band_rheology, offline_fields, read_run, write_band, write_fields,
+    FieldSettings, offline_fields, read_run, write_outputs,
 };
 use std::path::PathBuf;
 
@@ -57,9 +57,7 @@ pub fn run(args: CgArgs) -> Result<()> {
     let sums = pool.install(|| offline_fields(&args.dir, &run, s))?;
     let out = args.out.unwrap_or_else(|| args.dir.join("cg"));
     std::fs::create_dir_all(&out).with_context(|| format!("cannot create {}", out.display()))?;
-    write_fields(&sums, &run.spec, &out)?;
-    let band = band_rheology(&run, &sums);
-    write_band(&band, &out)?;
+    let band = write_outputs(&run, &sums, &out)?;
     println!(
         "{} snapshots in the averaging window coarse-grained onto {} points: {}",
         sums.snapshots,

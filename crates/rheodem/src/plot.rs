@@ -1,8 +1,11 @@
-//! Line plots rendered to SVG with a bundled font (DejaVu Sans), so that figures need no
-//! system font libraries.
+//! Line plots and heat maps, rendered to SVG (heat maps also to PNG) with a bundled font
+//! (DejaVu Sans), so that figures need no system font libraries.
 
 use plotters::prelude::*;
 use std::sync::Once;
+
+mod heat_map;
+pub use heat_map::HeatMap;
 
 /// One named curve: `(x, y)` points joined by lines.
 pub struct Series<'a> {

@@ -281,8 +281,24 @@ fn small_wet_cell_fields_on_the_fly_equal_offline() {
         "fields.vti",
         "band-heights.csv",
         "band-points.csv",
+        "band-rheology.svg",
     ] {
         assert!(dir.join(f).exists(), "{f} missing");
+    }
+    for map in [
+        "velocity",
+        "strain-rate",
+        "volume-fraction",
+        "pressure",
+        "friction",
+    ] {
+        let png = std::fs::read(dir.join(format!("map-{map}.png"))).expect("map png");
+        assert!(png.starts_with(b"\x89PNG"), "map-{map}.png is not a PNG");
+        let svg = std::fs::read_to_string(dir.join(format!("map-{map}.svg"))).expect("map svg");
+        assert!(
+            svg.contains("band centre"),
+            "map-{map}.svg lacks the band centre"
+        );
     }
 
     let stored = read_run(&dir).expect("read");

@@ -1283,12 +1283,7 @@ impl SplitBottomRun {
         let path = dir.join("band.csv");
         write_atomic(&path, band.as_bytes()).map_err(io_err("write", &path))?;
         let band = match self.fields.as_ref().filter(|s| s.snapshots > 0) {
-            Some(sums) => {
-                cell_fields::write_fields(sums, &self.spec, dir)?;
-                let band = cell_fields::band_rheology(self, sums);
-                cell_fields::write_band(&band, dir)?;
-                Some(band)
-            }
+            Some(sums) => Some(cell_fields::write_outputs(self, sums, dir)?),
             None => None,
         };
 

@@ -9,11 +9,11 @@ use crate::cg::shear_band::{
 };
 use crate::cg::snapshot::{contacts_csv, particles_csv, read_contacts_csv, read_particles_csv};
 use crate::cg::{
-    CgError, CgSums, ContactRecord, Grid, Kernel, KernelShape, Material, ParticleRecord, Snapshot,
-    fields,
+    CgError, CgSums, ContactRecord, FieldPoint, Grid, Kernel, KernelShape, Material,
+    ParticleRecord, Snapshot, fields,
 };
 use crate::io::atomic::write_atomic;
-use crate::plot::{Labels, Markers, Series, plot_svg};
+use crate::plot::{HeatMap, Labels, Markers, Series, plot_svg};
 use crate::run::{RunError, io_err, read_checkpoint};
 use std::path::{Path, PathBuf};
 
@@ -120,9 +120,17 @@ pub fn write_records(
     write_atomic(&cp, contacts_csv(contacts).as_bytes()).map_err(io_err("write", &cp))
 }
 
-/// Writes `fields.csv` and `fields.vti` of `sums` into `dir`.
-pub fn write_fields(sums: &CgSums, spec: &SplitBottomSpec, dir: &Path) -> Result<(), RunError> {
-    let points = fields(sums, Some(&material(spec)));
+/// Writes every output of `sums`' fields into `dir`: `fields.csv` and `fields.vti`, the band
+/// tables and figure ([`write_band`]) and the heat maps ([`write_maps`]); returns the band.
+///
+/// # Errors
+/// [`RunError`] when a file cannot be written.
+pub fn write_outputs(
+    run: &SplitBottomRun,
+    sums: &CgSums,
+    dir: &Path,
+) -> Result<BandRheology, RunError> {
+    let points = fields(sums, Some(&material(&run.spec)));
     let csv = dir.join("fields.csv");
     write_atomic(
         &csv,
@@ -134,7 +142,11 @@ pub fn write_fields(sums: &CgSums, spec: &SplitBottomSpec, dir: &Path) -> Result
         &vti,
         crate::cg::output::to_vti(&sums.grid, &points).as_bytes(),
     )
-    .map_err(io_err("write", &vti))
+    .map_err(io_err("write", &vti))?;
+    let band = band_of_fields(run, &sums.grid, &points);
+    write_band(&band, dir)?;
+    write_maps(&sums.grid, &points, &band, dir)?;
+    Ok(band)
 }
 
 /// The state of the run in `dir` as of its last checkpoint, read without locking or
@@ -204,10 +216,14 @@ pub struct BandRheology {
 
 /// The band and its rheology from `sums`' fields (Roy et al. 2016, Sects. 3.1–3.2).
 pub fn band_rheology(run: &SplitBottomRun, sums: &CgSums) -> BandRheology {
+    band_of_fields(run, &sums.grid, &fields(sums, Some(&material(&run.spec))))
+}
+
+/// The band and its rheology from the fields `points` on `grid`.
+fn band_of_fields(run: &SplitBottomRun, grid: &Grid, points: &[FieldPoint]) -> BandRheology {
     let spec = &run.spec;
-    let points = fields(sums, Some(&material(spec)));
-    let heights = band_by_height(&sums.grid, &points, spec.omega, 0.8);
-    let band = band_points(&sums.grid, &points, &heights);
+    let heights = band_by_height(grid, points, spec.omega, 0.8);
+    let band = band_points(grid, points, &heights);
     let d = spec.diameter;
     let weight = spec.groups(&run.geometry, run.simulation.dt).weight;
     let pressure_min = BAND_PRESSURE_MIN_SCALED * weight / (d * d);
@@ -330,4 +346,100 @@ fn write_band_figure(band: &BandRheology, dir: &Path) -> Result<(), RunError> {
     .map_err(|e| RunError::Scenario(crate::scenario::invalid("figure", "band-rheology.svg", e)))?;
     let path = dir.join("band-rheology.svg");
     write_atomic(&path, svg.as_bytes()).map_err(io_err("write", &path))
+}
+
+/// The fields drawn as heat maps over `(r, z)`: file stem, title, colour-bar label, and how to
+/// read the value (in the unit of the label) from a point.
+type MapField = (
+    &'static str,
+    &'static str,
+    &'static str,
+    fn(&FieldPoint) -> f64,
+);
+
+const MAPS: [MapField; 5] = [
+    ("map-velocity", "Azimuthal velocity", "v_φ (mm/s)", |p| {
+        1e3 * p.velocity[1]
+    }),
+    ("map-strain-rate", "Strain rate", "γ̇ (1/s)", |p| {
+        p.strain_rate
+    }),
+    ("map-volume-fraction", "Volume fraction", "φ", |p| {
+        p.volume_fraction
+    }),
+    ("map-pressure", "Pressure", "P (Pa)", |p| p.pressure),
+    ("map-friction", "Macroscopic friction", "μ = τ/P", |p| {
+        p.friction
+    }),
+];
+
+/// Writes `map-*.svg` and `map-*.png`: `v_φ`, `γ̇`, `φ`, `P` and `μ` over `(r, z)` (in mm),
+/// with the band centre per height (the error-function fit's `R_c`, and the strain-rate
+/// maximum) drawn over them. Points below a hundredth of the largest density (outside the
+/// packing) are left blank.
+///
+/// # Errors
+/// [`RunError`] when a map cannot be drawn or written.
+pub fn write_maps(
+    grid: &Grid,
+    points: &[FieldPoint],
+    band: &BandRheology,
+    dir: &Path,
+) -> Result<(), RunError> {
+    let ax = grid.axes();
+    let mm = |a: usize| -> Vec<f64> { (0..ax.n[a]).map(|i| 1e3 * ax.point(a, i)).collect() };
+    let (rs, zs) = (mm(0), mm(1));
+    let top = points.iter().map(|p| p.density).fold(0.0, f64::max);
+    let erf: Vec<(f64, f64)> = band
+        .heights
+        .iter()
+        .filter_map(|b| b.erf.as_ref().ok().map(|e| (1e3 * e.centre, 1e3 * b.z)))
+        .collect();
+    let peak: Vec<(f64, f64)> = band
+        .heights
+        .iter()
+        .map(|b| (1e3 * b.r_at_max, 1e3 * b.z))
+        .collect();
+    let overlays = [
+        Series {
+            label: "band centre R_c (erf fit)",
+            points: &erf,
+        },
+        Series {
+            label: "strain-rate maximum",
+            points: &peak,
+        },
+    ];
+    let failed = |name: &str, e: String| {
+        RunError::Scenario(crate::scenario::invalid("figure", format!("{name}.svg"), e))
+    };
+    for (name, title, value, read) in MAPS {
+        let values: Vec<f64> = points
+            .iter()
+            .map(|p| {
+                if p.density > 0.01 * top {
+                    read(p)
+                } else {
+                    f64::NAN
+                }
+            })
+            .collect();
+        let map = HeatMap {
+            title,
+            x: "r (mm)",
+            y: "z (mm)",
+            value,
+            xs: &rs,
+            ys: &zs,
+            values: &values,
+            overlays: &overlays,
+        };
+        let svg = map.to_svg().map_err(|e| failed(name, e))?;
+        let path = dir.join(format!("{name}.svg"));
+        write_atomic(&path, svg.as_bytes()).map_err(io_err("write", &path))?;
+        let png = map.to_png().map_err(|e| failed(name, e))?;
+        let path = dir.join(format!("{name}.png"));
+        write_atomic(&path, &png).map_err(io_err("write", &path))?;
+    }
+    Ok(())
 }
