@@ -24,19 +24,22 @@ names=("$@")
 # name:law:a:b — willett a = γ_s (N/m), b = V_b (nl); linear a = f_max (N), b = k_c (N/m), the
 # equivalents of the 0.02 N/m Willett bridge from `rheodem contact equivalent` (equal f_max and
 # adhesive energy E, or equal f_max and rupture distance S_c); rate: a = Ω (rad/s), b = duration
-# (s), same total rotation as the Ω = 0.5 runs, averaged over the same angle.
+# (s), same total rotation as the Ω = 0.5 runs, averaged over the same angle; gravity: a = g
+# (m/s²), sheared from the same settled state.
 for spec in "dry:dry" "wet-g0.02-v75:willett:0.02:75" "wet-g0.02-v14:willett:0.02:14" \
             "wet-g0.02-v200:willett:0.02:200" "wet-g0.04-v75:willett:0.04:75" \
             "wet-g0.06-v75:willett:0.06:75" \
             "lin-E-v75:linear:1.2989e-4:0.3879" "lin-Sc-v75:linear:1.2989e-4:0.2622" \
             "lin-E-v14:linear:1.2989e-4:0.8448" "lin-Sc-v14:linear:1.2989e-4:0.4589" \
-            "dry-omega0.25:rate:0.25:5.0" "wet-g0.02-v75-omega0.25:rate-wet:0.25:5.0"; do
+            "dry-omega0.25:rate:0.25:5.0" "wet-g0.02-v75-omega0.25:rate-wet:0.25:5.0" \
+            "dry-g3:gravity:3" "dry-g30:gravity:30"; do
   IFS=: read -r name law a b <<< "$spec"
   if [ ${#names[@]} -gt 0 ] && [[ " ${names[*]} " != *" $name "* ]]; then continue; fi
   case $law in
     dry) run "$name" ;;
     willett) run "$name" --law willett --surface-tension "$a" --volume-nl "$b" ;;
     linear) run "$name" --law linear --max-force "$a" --adhesive-stiffness "$b" ;;
+    gravity) run "$name" --gravity "$a" ;;
     rate) OMEGA=$a DURATION=$b AVERAGE_FROM=$(echo "$b * 0.4" | bc -l) run "$name" ;;
     rate-wet) OMEGA=$a DURATION=$b AVERAGE_FROM=$(echo "$b * 0.4" | bc -l) run "$name" \
                 --law willett --surface-tension 0.02 --volume-nl 75 ;;

@@ -1328,6 +1328,7 @@ impl SplitBottomRun {
                 "torque_measured": self.results().net_torque.map(|e| e.mean),
                 "cohesion_from_torque": b.fit.zip(self.results().net_torque).map(|(f, t)|
                     t.mean / b.torque_factor - f.slope * b.pressure_avg),
+                "shear_box_laws": b.laws,
             })),
         });
         let path = dir.join("summary.json");

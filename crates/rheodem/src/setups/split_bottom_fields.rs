@@ -14,6 +14,7 @@ use crate::cg::{
 };
 use crate::io::atomic::write_atomic;
 use crate::plot::{HeatMap, Labels, Markers, Series, plot_svg};
+use crate::rheology::{MuLaw, PhiLaw};
 use crate::run::{RunError, io_err, read_checkpoint};
 use std::path::{Path, PathBuf};
 
@@ -212,6 +213,106 @@ pub struct BandRheology {
     pub torque_factor: f64,
     /// The macroscopic torque `T_macro = M (μ P_avg + c)` of the full ring (N m).
     pub torque_macro: Option<f64>,
+    /// The particles' sliding friction `μ_p`, which picks the laws' row.
+    pub mu_p: f64,
+    /// The band's `φ` and `μ` against the shear box's laws at the same `I`, `p*`, `Bo`, if
+    /// the cell's `μ_p` is tabulated.
+    pub laws: Option<LawComparison>,
+}
+
+/// Ratios of a quantity measured at the band points to a law's prediction at the same local
+/// numbers: their mean and its standard error, over the points inside the law's fit range.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+pub struct Ratio {
+    /// Mean of measured over predicted.
+    pub mean: f64,
+    /// Standard error of the mean (the points are correlated over a kernel width, so this
+    /// understates the uncertainty).
+    pub stderr: f64,
+    /// Points compared.
+    pub points: usize,
+}
+
+impl Ratio {
+    fn of(ratios: &[f64]) -> Option<Ratio> {
+        let n = ratios.len();
+        if n < 2 {
+            return None;
+        }
+        let mean = ratios.iter().sum::<f64>() / n as f64;
+        let var = ratios.iter().map(|r| (r - mean).powi(2)).sum::<f64>() / (n - 1) as f64;
+        Some(Ratio {
+            mean,
+            stderr: (var / n as f64).sqrt(),
+            points: n,
+        })
+    }
+}
+
+/// The band's local rheology against Shi et al. 2020's shear-box laws (docs/model.md §8):
+/// `φ(I, p*, Bo)` over its fit range (`φ > 0.5`, `I < 0.25`, `p* < 0.03`) and `μ(I, p*, Bo)`
+/// over its own (`0.005 < I < 0.5`, `p* < 0.1`), at the band points above the fitted
+/// pressure cut-off.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+pub struct LawComparison {
+    /// `μ_p` of the laws' row.
+    pub mu_p: f64,
+    /// Median inertial number of the compared points.
+    pub inertial_median: f64,
+    /// Median softness of the compared points.
+    pub softness_median: f64,
+    /// `φ / φ_law`.
+    pub volume_fraction: Option<Ratio>,
+    /// `μ / μ_law`.
+    pub friction: Option<Ratio>,
+}
+
+/// `φ_law` and `μ_law` at a band point (`NaN` outside the laws' fit ranges or without a
+/// tabulated `μ_p`).
+fn law_values(mu_p: f64, p: &RheologyPoint) -> (f64, f64) {
+    let (i, ps, bo) = (p.inertial_number, p.softness, p.bond_number);
+    let phi = PhiLaw::for_mu_p(mu_p)
+        .filter(|_| p.volume_fraction > 0.5 && i < 0.25 && ps < 0.03)
+        .map_or(f64::NAN, |l| l.phi(i, ps, bo));
+    let mu = MuLaw::for_mu_p(mu_p)
+        .filter(|_| (0.005..0.5).contains(&i) && ps < 0.1)
+        .map_or(f64::NAN, |l| l.mu(i, ps, bo));
+    (phi, mu)
+}
+
+fn compare_laws(mu_p: f64, points: &[RheologyPoint], p_min: f64) -> Option<LawComparison> {
+    if PhiLaw::for_mu_p(mu_p).is_none() && MuLaw::for_mu_p(mu_p).is_none() {
+        return None;
+    }
+    let used: Vec<&RheologyPoint> = points
+        .iter()
+        .filter(|p| p.pressure >= p_min && p.inertial_number.is_finite())
+        .collect();
+    let (mut phi, mut mu, mut inertial, mut softness) = (vec![], vec![], vec![], vec![]);
+    for p in &used {
+        let (phi_law, mu_law) = law_values(mu_p, p);
+        if phi_law.is_finite() {
+            phi.push(p.volume_fraction / phi_law);
+        }
+        if mu_law.is_finite() {
+            mu.push(p.friction / mu_law);
+        }
+        if phi_law.is_finite() || mu_law.is_finite() {
+            inertial.push(p.inertial_number);
+            softness.push(p.softness);
+        }
+    }
+    let median = |v: &mut Vec<f64>| {
+        v.sort_by(f64::total_cmp);
+        v.get(v.len() / 2).copied().unwrap_or(f64::NAN)
+    };
+    Some(LawComparison {
+        mu_p,
+        inertial_median: median(&mut inertial),
+        softness_median: median(&mut softness),
+        volume_fraction: Ratio::of(&phi),
+        friction: Ratio::of(&mu),
+    })
 }
 
 /// The band and its rheology from `sums`' fields (Roy et al. 2016, Sects. 3.1–3.2).
@@ -240,6 +341,8 @@ fn band_of_fields(run: &SplitBottomRun, grid: &Grid, points: &[FieldPoint]) -> B
     let torque_factor = 2.0 * std::f64::consts::PI * h * (ro * ro - ri * ri)
         + 2.0 / 3.0 * std::f64::consts::PI * (ro.powi(3) + ri.powi(3) - 2.0 * rs.powi(3));
     BandRheology {
+        laws: compare_laws(spec.friction, &band, pressure_min),
+        mu_p: spec.friction,
         cohesion_scaled: fit.map(|f| f.intercept * d * d / weight),
         torque_macro: fit.map(|f| torque_factor * (f.slope * pressure_avg + f.intercept)),
         heights,
@@ -283,8 +386,9 @@ pub fn write_band(band: &BandRheology, dir: &Path) -> Result<(), RunError> {
     }
     let path = dir.join("band-heights.csv");
     write_atomic(&path, s.as_bytes()).map_err(io_err("write", &path))?;
-    let mut s = String::from("r,z,I,pstar,Bo,phi,mu,tau,P,strain_rate,Z\n");
+    let mut s = String::from("r,z,I,pstar,Bo,phi,mu,tau,P,strain_rate,Z,phi_law,mu_law\n");
     for p in &band.points {
+        let (phi_law, mu_law) = law_values(band.mu_p, p);
         let cols = [
             p.r,
             p.z,
@@ -297,6 +401,8 @@ pub fn write_band(band: &BandRheology, dir: &Path) -> Result<(), RunError> {
             p.pressure,
             p.strain_rate,
             p.coordination,
+            phi_law,
+            mu_law,
         ];
         let row: Vec<String> = cols.iter().map(|x| format!("{x:e}")).collect();
         s.push_str(&row.join(","));
@@ -442,4 +548,55 @@ pub fn write_maps(
         write_atomic(&path, &png).map_err(io_err("write", &path))?;
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn point(inertial: f64, softness: f64, scale: f64) -> RheologyPoint {
+        let phi = PhiLaw::for_mu_p(0.01).expect("tabulated");
+        let mu = MuLaw::for_mu_p(0.01).expect("tabulated");
+        RheologyPoint {
+            r: 0.08,
+            z: 0.01,
+            inertial_number: inertial,
+            softness,
+            bond_number: 0.5,
+            volume_fraction: scale * phi.phi(inertial, softness, 0.5),
+            friction: scale * mu.mu(inertial, softness, 0.5),
+            shear_stress: 30.0,
+            pressure: 200.0,
+            strain_rate: 1.0,
+            coordination: 4.0,
+        }
+    }
+
+    #[test]
+    fn band_points_on_the_laws_give_ratios_of_one_inside_the_fit_ranges() {
+        let mut points: Vec<RheologyPoint> = (1..=9)
+            .map(|k| point(0.01 * f64::from(k), 0.002 * f64::from(k), 1.0))
+            .collect();
+        // Outside both fit ranges (I ≥ 0.5), below the pressure cut-off, or beyond the φ
+        // law's softness (p* ≥ 0.03, where only μ counts): not, or only partly, compared.
+        points.push(point(0.6, 0.01, 2.0));
+        points.push(RheologyPoint {
+            pressure: 50.0,
+            ..point(0.02, 0.01, 2.0)
+        });
+        points.push(point(0.02, 0.05, 1.0));
+        let c = compare_laws(0.01, &points, 100.0).expect("tabulated μ_p");
+        let (phi, mu) = (c.volume_fraction.expect("φ"), c.friction.expect("μ"));
+        assert_eq!((phi.points, mu.points), (9, 10));
+        assert!((phi.mean - 1.0).abs() < 1e-12 && phi.stderr < 1e-12);
+        assert!((mu.mean - 1.0).abs() < 1e-12 && mu.stderr < 1e-12);
+        assert!((c.inertial_median - 0.05).abs() < 1e-12);
+        // Scaled points give the scale; an untabulated μ_p gives no comparison.
+        let scaled: Vec<RheologyPoint> = (1..=4)
+            .map(|k| point(0.01 * f64::from(k), 0.005, 0.9))
+            .collect();
+        let c = compare_laws(0.01, &scaled, 100.0).expect("tabulated μ_p");
+        assert!((c.friction.expect("μ").mean - 0.9).abs() < 1e-12);
+        assert!(compare_laws(0.123, &scaled, 100.0).is_none());
+    }
 }
