@@ -4,7 +4,7 @@ use anyhow::{Context, Result};
 use clap::Args;
 use rheodem::cg::KernelShape;
 use rheodem::setups::split_bottom_fields::{
-    FieldSettings, offline_fields, read_run, write_outputs,
+    FieldSettings, export_mercury, offline_fields, read_run, write_outputs,
 };
 use std::path::PathBuf;
 
@@ -28,6 +28,10 @@ pub struct CgArgs {
     /// Where to write fields.csv and fields.vti (default: DIR/cg).
     #[arg(long, short)]
     out: Option<PathBuf>,
+    /// Also write the snapshots of the averaging window in MercuryDPM's formats
+    /// (mercury.data and mercury.fstat in the output directory), for MercuryCG.
+    #[arg(long)]
+    mercury: bool,
 }
 
 /// Kernel shapes.
@@ -76,6 +80,14 @@ pub fn run(args: CgArgs) -> Result<()> {
             fit.intercept_err,
             c_star,
             band.torque_macro.unwrap_or(f64::NAN)
+        );
+    }
+    if args.mercury {
+        let n = export_mercury(&args.dir, &run, &out)?;
+        println!(
+            "{n} snapshots in MercuryDPM's formats: {} and {}",
+            out.join("mercury.data").display(),
+            out.join("mercury.fstat").display()
         );
     }
     Ok(())

@@ -257,7 +257,9 @@ fn bad_geometry_gets_specific_errors() {
 fn small_wet_cell_fields_on_the_fly_equal_offline() {
     use rheodem::cg::fields;
     use rheodem::setups::split_bottom::Cohesion;
-    use rheodem::setups::split_bottom_fields::{FieldSettings, material, offline_fields, read_run};
+    use rheodem::setups::split_bottom_fields::{
+        FieldSettings, export_mercury, material, offline_fields, read_run,
+    };
     let dir = tmp("fields");
     let spec = SplitBottomSpec {
         cohesion: Cohesion::Willett {
@@ -303,6 +305,24 @@ fn small_wet_cell_fields_on_the_fly_equal_offline() {
 
     let stored = read_run(&dir).expect("read");
     let offline = offline_fields(&dir, &stored, FieldSettings::of(&run.spec)).expect("offline");
+    // The same snapshots in MercuryDPM's formats: one block per snapshot, each with every
+    // particle, and per block at least a line per contact of a free particle.
+    let export = dir.join("mercury");
+    std::fs::create_dir_all(&export).expect("mkdir");
+    assert_eq!(export_mercury(&dir, &stored, &export).expect("export"), 3);
+    let data = std::fs::read_to_string(export.join("mercury.data")).expect("data");
+    let n = stored.simulation.particles.len();
+    let heads: Vec<&str> = data.lines().step_by(n + 1).collect();
+    assert_eq!(heads.len(), 3);
+    assert!(
+        heads.iter().all(|h| h.starts_with(&format!("{n} "))),
+        "{heads:?}"
+    );
+    let fstat = std::fs::read_to_string(export.join("mercury.fstat")).expect("fstat");
+    let blocks = fstat.lines().filter(|l| l.starts_with("# ")).count();
+    let lines = fstat.lines().filter(|l| !l.starts_with('#')).count();
+    assert_eq!(blocks, 9);
+    assert!(lines > 3 * n, "{lines} contact lines for {n} particles");
     assert_eq!(offline.snapshots, live.snapshots);
     assert_eq!(offline.grid, live.grid);
     for (a, b) in live.points.iter().zip(&offline.points) {

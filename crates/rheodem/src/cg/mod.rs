@@ -14,6 +14,7 @@
 pub mod fields;
 pub mod grid;
 pub mod kernel;
+pub mod mercury;
 pub mod output;
 pub mod shear_band;
 pub mod snapshot;

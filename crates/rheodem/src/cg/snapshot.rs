@@ -28,6 +28,9 @@ pub struct ParticleRecord {
     pub mass: f64,
     /// Whether the particle moves under its forces (wall particles do not).
     pub free: bool,
+    /// Angular velocity (rad/s); `NaN` when read from a file of a version that did not
+    /// record it.
+    pub angular_velocity: DVec3,
 }
 
 impl ParticleRecord {
@@ -41,6 +44,7 @@ impl ParticleRecord {
                 radius: p.radius[i],
                 mass: p.mass[i],
                 free: p.motion[i].is_free(),
+                angular_velocity: p.angular_velocity[i],
             })
             .collect()
     }
@@ -295,7 +299,11 @@ pub fn images_for(domain: &Domain, grid: &Grid) -> Vec<ImageTransform> {
 }
 
 /// Columns of a particle file (`snapshot-N.particles.csv`).
-pub const PARTICLE_COLUMNS: &str = "id,x,y,z,vx,vy,vz,radius,mass,free";
+pub const PARTICLE_COLUMNS: &str = "id,x,y,z,vx,vy,vz,radius,mass,free,wx,wy,wz";
+
+/// Columns of the particle files written before the angular velocity was recorded; they
+/// still read, with the angular velocity `NaN`.
+const PARTICLE_COLUMNS_NO_SPIN: &str = "id,x,y,z,vx,vy,vz,radius,mass,free";
 
 /// Columns of a contact file (`snapshot-N.contacts.csv`): ids, whether `j` is an analytic
 /// wall, the overlap, then `i`'s centre, branch, contact point and force, and `j`'s centre,
@@ -317,6 +325,7 @@ pub fn particles_csv(records: &[ParticleRecord]) -> String {
         row.push(format!("{:e}", p.radius));
         row.push(format!("{:e}", p.mass));
         row.push(u8::from(p.free).to_string());
+        push_vec(&mut row, p.angular_velocity);
         out.push_str(&row.join(","));
         out.push('\n');
     }
@@ -407,7 +416,13 @@ fn vec_at(r: &[f64], k: usize) -> DVec3 {
 /// # Errors
 /// [`super::CgError::Invalid`] naming the line and field of the first bad value.
 pub fn read_particles_csv(text: &str, what: &str) -> Result<Vec<ParticleRecord>, super::CgError> {
-    rows(text, PARTICLE_COLUMNS, what)?
+    let old = text.lines().next().map(str::trim) == Some(PARTICLE_COLUMNS_NO_SPIN);
+    let header = if old {
+        PARTICLE_COLUMNS_NO_SPIN
+    } else {
+        PARTICLE_COLUMNS
+    };
+    rows(text, header, what)?
         .into_iter()
         .map(|r| {
             Ok(ParticleRecord {
@@ -417,6 +432,7 @@ pub fn read_particles_csv(text: &str, what: &str) -> Result<Vec<ParticleRecord>,
                 radius: r[7],
                 mass: r[8],
                 free: r[9] != 0.0,
+                angular_velocity: if old { DVec3::NAN } else { vec_at(&r, 10) },
             })
         })
         .collect()
@@ -481,9 +497,14 @@ mod tests {
             radius: 1.1e-3,
             mass: 1.0 / 7.0,
             free: false,
+            angular_velocity: DVec3::new(3.0, -1.0 / 9.0, 0.0),
         }];
         let back = read_particles_csv(&particles_csv(&particles), "p.csv").expect("read");
         assert_eq!(back, particles);
+        // A file without the angular velocity columns reads, with it unknown.
+        let old = "id,x,y,z,vx,vy,vz,radius,mass,free\n3,1e-1,2e-1,0,0,0,0,1e-3,1e0,1\n";
+        let back = read_particles_csv(old, "old.csv").expect("old format");
+        assert!(back[0].angular_velocity.is_nan() && back[0].free);
     }
 
     #[test]
@@ -495,6 +516,7 @@ mod tests {
             radius: 1.0,
             mass: 1.0,
             free: true,
+            angular_velocity: DVec3::ZERO,
         }]);
         let bad = good.replacen(",1e0,1e0,1", ",x,1e0,1", 1);
         let e = read_particles_csv(&bad, "p.csv")

@@ -172,21 +172,55 @@ pub fn offline_fields(
 ) -> Result<CgSums, RunError> {
     let kernel = settings.kernel(run.spec.diameter)?;
     let mut sums = CgSums::new(settings.grid(run)?)?;
-    let t0 = run.shear_start.map_or(f64::INFINITY, |s| s.0);
-    for (time, vtp) in &run.snapshots {
-        if time - t0 < run.spec.average_from {
-            continue;
-        }
-        let (pp, cp) = record_paths(dir, vtp);
-        let read = |p: &Path| std::fs::read_to_string(p).map_err(io_err("read", p));
-        let particles = read_particles_csv(&read(&pp)?, &pp.display().to_string())?;
-        let contacts = read_contacts_csv(&read(&cp)?, &cp.display().to_string())?;
+    for snapshot in window_records(dir, run) {
+        let (time, particles, contacts) = snapshot?;
         sums.add_snapshot(
             &kernel,
-            &Snapshot::assemble(*time, &particles, &contacts, Vec::new()),
+            &Snapshot::assemble(time, &particles, &contacts, Vec::new()),
         );
     }
     Ok(sums)
+}
+
+/// A stored snapshot's time (s) with its particle and contact records.
+type Records = (f64, Vec<ParticleRecord>, Vec<ContactRecord>);
+
+/// The records of the run's stored snapshots in the averaging window, read one at a time.
+fn window_records<'a>(
+    dir: &'a Path,
+    run: &'a SplitBottomRun,
+) -> impl Iterator<Item = Result<Records, RunError>> + 'a {
+    let t0 = run.shear_start.map_or(f64::INFINITY, |s| s.0);
+    run.snapshots
+        .iter()
+        .filter(move |(time, _)| time - t0 >= run.spec.average_from)
+        .map(move |(time, vtp)| {
+            let (pp, cp) = record_paths(dir, vtp);
+            let read = |p: &Path| std::fs::read_to_string(p).map_err(io_err("read", p));
+            let particles = read_particles_csv(&read(&pp)?, &pp.display().to_string())?;
+            let contacts = read_contacts_csv(&read(&cp)?, &cp.display().to_string())?;
+            Ok((*time, particles, contacts))
+        })
+}
+
+/// Writes `mercury.data` and `mercury.fstat` into `out`: the run's stored snapshots in the
+/// averaging window in MercuryDPM's formats ([`crate::cg::mercury`]); returns how many.
+///
+/// # Errors
+/// [`RunError`] when a snapshot cannot be read or exported, or a file cannot be written.
+pub fn export_mercury(dir: &Path, run: &SplitBottomRun, out: &Path) -> Result<usize, RunError> {
+    let (mut data, mut fstat, mut count) = (String::new(), String::new(), 0);
+    for snapshot in window_records(dir, run) {
+        let (time, particles, contacts) = snapshot?;
+        crate::cg::mercury::data_block(&mut data, time, &particles)?;
+        crate::cg::mercury::fstat_block(&mut fstat, time, &particles, &contacts)?;
+        count += 1;
+    }
+    for (name, text) in [("mercury.data", data), ("mercury.fstat", fstat)] {
+        let path = out.join(name);
+        write_atomic(&path, text.as_bytes()).map_err(io_err("write", &path))?;
+    }
+    Ok(count)
 }
 
 /// Lowest pressure, in units of `f_g / d_p²`, of the band points fitted by `τ = μ P + c`
