@@ -13,19 +13,22 @@ mkdir -p "$V"
 if [ ! -f "$V/settled/settled.bin" ]; then
   "$B" split-bottom --time-step mean-pair --duration 0.01 --average-from 0 --out "$V/settled" --quiet
 fi
-common=(--time-step mean-pair --quiet --from "$V/settled")
-# run NAME [OPTIONS…]: Ω, duration and averaging start from OMEGA, DURATION, AVERAGE_FROM.
+common=(--time-step mean-pair --quiet)
+# run NAME [OPTIONS…]: Ω, duration and averaging start from OMEGA, DURATION, AVERAGE_FROM,
+# the settled state from FROM (default: $V/settled).
+# A run that fails is reported and the next one goes on.
 run() {
   local name=$1; shift; echo "== $name"
-  "$B" split-bottom "${common[@]}" --omega "${OMEGA:-0.5}" --duration "${DURATION:-2.5}" \
-    --average-from "${AVERAGE_FROM:-1.0}" --out "$V/$name" "$@" 2>&1 | tee "$V/$name.log"
+  "$B" split-bottom "${common[@]}" --from "${FROM:-$V/settled}" --omega "${OMEGA:-0.5}" --duration "${DURATION:-2.5}" \
+    --average-from "${AVERAGE_FROM:-1.0}" --out "$V/$name" "$@" 2>&1 | tee "$V/$name.log" \
+    || echo "== $name failed (see $V/$name.log)"
 }
 names=("$@")
 # name:law:a:b — willett a = γ_s (N/m), b = V_b (nl); linear a = f_max (N), b = k_c (N/m), the
 # equivalents of the 0.02 N/m Willett bridge from `rheodem contact equivalent` (equal f_max and
 # adhesive energy E, or equal f_max and rupture distance S_c); rate: a = Ω (rad/s), b = duration
 # (s), same total rotation as the Ω = 0.5 runs, averaged over the same angle; gravity: a = g
-# (m/s²), sheared from the same settled state.
+# (m/s²), from a state settled under that g.
 for spec in "dry:dry" "wet-g0.02-v75:willett:0.02:75" "wet-g0.02-v14:willett:0.02:14" \
             "wet-g0.02-v200:willett:0.02:200" "wet-g0.04-v75:willett:0.04:75" \
             "wet-g0.06-v75:willett:0.06:75" \
@@ -39,7 +42,13 @@ for spec in "dry:dry" "wet-g0.02-v75:willett:0.02:75" "wet-g0.02-v14:willett:0.0
     dry) run "$name" ;;
     willett) run "$name" --law willett --surface-tension "$a" --volume-nl "$b" ;;
     linear) run "$name" --law linear --max-force "$a" --adhesive-stiffness "$b" ;;
-    gravity) run "$name" --gravity "$a" ;;
+    gravity)
+      # A shear run keeps the settled state's gravity: settle under this g first.
+      if [ ! -f "$V/settled-g$a/settled.bin" ]; then
+        "$B" split-bottom --time-step mean-pair --gravity "$a" --duration 0.01 --average-from 0 \
+          --out "$V/settled-g$a" --quiet
+      fi
+      FROM=$V/settled-g$a run "$name" --gravity "$a" ;;
     rate) OMEGA=$a DURATION=$b AVERAGE_FROM=$(echo "$b * 0.4" | bc -l) run "$name" ;;
     rate-wet) OMEGA=$a DURATION=$b AVERAGE_FROM=$(echo "$b * 0.4" | bc -l) run "$name" \
                 --law willett --surface-tension 0.02 --volume-nl 75 ;;
