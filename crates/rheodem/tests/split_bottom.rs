@@ -77,6 +77,29 @@ fn small_cell_runs_end_to_end() {
         assert!(dir.join(f).exists(), "{f} missing");
     }
     assert!(dir.join("snapshots.pvd").exists());
+    // The bottom is closed for the shear: the floor backstop sits at the smallest bottom
+    // particles' centres, and no free grain has sunk below it (beyond a contact's overlap).
+    let g = &run.geometry;
+    let floor = g.floor + g.radii[0];
+    let planes: Vec<f64> = run
+        .simulation
+        .walls
+        .iter()
+        .filter_map(|w| match w.shape {
+            rheodem::walls::WallShape::Plane { point, .. } => Some(point.z),
+            _ => None,
+        })
+        .collect();
+    assert_eq!(planes, [floor]);
+    let p = &run.simulation.particles;
+    let lowest = (0..p.len())
+        .filter(|&i| p.motion[i].is_free())
+        .map(|i| p.position[i].z - p.radius[i])
+        .fold(f64::INFINITY, f64::min);
+    assert!(
+        lowest > floor - 0.05 * g.radii[0],
+        "a free grain's underside at {lowest}"
+    );
     std::fs::remove_dir_all(&dir).ok();
 }
 

@@ -35,7 +35,7 @@ use crate::run::{RunError, io_err, lock, read_checkpoint, write_checkpoint};
 use crate::scenario::{ScenarioError, invalid};
 use crate::stage::{EndCondition, Verdict};
 use crate::timestep::shortest_contact_time;
-use crate::walls::Wall;
+use crate::walls::{Wall, WallShape};
 use glam::{DMat3, DVec3};
 use rand::{RngExt, SeedableRng};
 use rustc_hash::FxHashMap;
@@ -1040,6 +1040,7 @@ impl SplitBottomRun {
             sim.neighbors.range = law.range();
         }
         sim.neighbors.skin = self.spec.skin * self.spec.diameter;
+        close_bottom(&self.geometry, sim);
         for i in 0..sim.particles.len() {
             let part = sim.particles.part[i];
             if part == OUTER_BOTTOM || part == OUTER_WALL {
@@ -1447,6 +1448,35 @@ fn slabs(h: f64, d: f64) -> [(f64, f64); 3] {
         (0.5 * h - d, 0.5 * h + d),
         (h - 3.0 * d, h - d),
     ]
+}
+
+/// Closes the rough bottom for the shear. Where the rotating and the fixed bottom slide
+/// past each other at `R_s`, gaps open between their particles. A free grain on the mould
+/// floor could sink through such a gap below the wall particles' centres, and the closing
+/// gap would then crush it between a moving and a fixed wall particle. So the floor
+/// backstop rises from the mould floor to `floor + r_min`, the centres of the smallest
+/// bottom particles, and the free grains that lie lower (in the bottom layer's hollows)
+/// join the bottom wall on their side of `R_s`. With radii at most twice `r_min`, a free
+/// grain's centre then stays at or above the bottom particles' centres, so their contacts
+/// push it up and out.
+fn close_bottom(g: &Geometry, sim: &mut Simulation) {
+    let height = g.floor + g.radii[0];
+    let p = &mut sim.particles;
+    for i in 0..p.len() {
+        if p.motion[i].is_free() && p.position[i].z - p.radius[i] < height {
+            let part = if rho(p.position[i]) < g.split_radius {
+                INNER_BOTTOM
+            } else {
+                OUTER_BOTTOM
+            };
+            p.prescribe(i, Motion::Fixed, part);
+        }
+    }
+    for w in &mut sim.walls {
+        if let (BACKSTOPS, WallShape::Plane { point, .. }) = (w.part, &mut w.shape) {
+            point.z = height;
+        }
+    }
 }
 
 /// The smooth mould walls that stay as backstops.
