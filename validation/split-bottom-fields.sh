@@ -13,9 +13,9 @@ mkdir -p "$V"
 if [ ! -f "$V/settled/settled.bin" ]; then
   "$B" split-bottom --time-step mean-pair --duration 0.01 --average-from 0 --out "$V/settled" --quiet
 fi
-common=(--time-step mean-pair --quiet)
+common=(--time-step mean-pair --quiet ${THREADS:+--threads "$THREADS"})
 # run NAME [OPTIONS…]: Ω, duration and averaging start from OMEGA, DURATION, AVERAGE_FROM,
-# the settled state from FROM (default: $V/settled).
+# the settled state from FROM (default: $V/settled); worker threads from THREADS (default: all).
 # A run that fails is reported and the next one goes on.
 run() {
   local name=$1; shift; echo "== $name"

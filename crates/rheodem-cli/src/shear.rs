@@ -3,6 +3,7 @@
 use anyhow::{Context, Result, bail};
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
+use rheodem::domain::ShearDynamics;
 use rheodem::io::atomic::write_atomic;
 use rheodem::run::RunError;
 use rheodem::setups::shear_box::ShearBoxSpec;
@@ -65,10 +66,11 @@ pub struct ShearBoxArgs {
     /// Seed (0 to 2⁶³ − 1, the range a TOML file holds).
     #[arg(long, value_parser = clap::value_parser!(u64).range(..=i64::MAX as u64))]
     seed: Option<u64>,
-    /// Peculiar contacts (relative velocities without the mean flow; docs/model.md §4.4), for
-    /// comparison only; `--peculiar-contacts false` overrides a config file.
-    #[arg(long, num_args = 0..=1, default_missing_value = "true")]
-    peculiar_contacts: Option<bool>,
+    /// Shear dynamics (docs/model.md §4.3–4.5): lab (the default), peculiar-contacts (lab
+    /// dynamics, contacts without the mean-flow difference) or affine-drag (the source
+    /// papers' code: particles dragged with the mean flow, velocities relative to it).
+    #[arg(long, value_parser = clap::value_parser!(ShearDynamics))]
+    shear_dynamics: Option<ShearDynamics>,
     /// Run directory (default: runs/shear-box).
     #[arg(long, short)]
     out: Option<PathBuf>,
@@ -90,6 +92,10 @@ fn spec_from(a: &ShearBoxArgs) -> Result<ShearBoxSpec> {
         }
         None => toml::Table::new(),
     };
+    if a.shear_dynamics.is_some() {
+        // The option replaces the older spelling of a config file.
+        table.remove("peculiar_contacts");
+    }
     let mut set = |k: &str, v: Option<toml::Value>| {
         if let Some(v) = v {
             table.insert(k.to_string(), v);
@@ -120,8 +126,9 @@ fn spec_from(a: &ShearBoxArgs) -> Result<ShearBoxSpec> {
             .map(toml::Value::Integer),
     );
     set(
-        "peculiar_contacts",
-        a.peculiar_contacts.map(toml::Value::Boolean),
+        "shear_dynamics",
+        a.shear_dynamics
+            .map(|d| toml::Value::String(d.name().into())),
     );
     let spec =
         ShearBoxSpec::from_table(table).map_err(|e| anyhow::anyhow!("shear-box point: {e}"))?;

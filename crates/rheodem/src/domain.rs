@@ -6,8 +6,9 @@
 //! velocity jump of Lees-Edwards images), [`Domain::rotated_images`] (the images the
 //! neighbour search must query besides the translations of the periodic axes),
 //! [`Domain::wrap`] of position, velocity *and* spin (returning the map applied, so that
-//! contact history and prescribed motions follow it), [`Domain::volume`] and
-//! [`Domain::mean_flow`].
+//! contact history and prescribed motions follow it), [`Domain::volume`],
+//! [`Domain::mean_flow`] and [`Domain::peculiar_velocity`] (what a stored velocity means
+//! under the box's [`ShearDynamics`]).
 //!
 //! A pair that interacts across a periodic boundary is stored in the neighbour list with an
 //! *image code*: which copy of the second particle it sees. The code is fixed between list
@@ -157,8 +158,92 @@ impl Wedge {
     }
 }
 
-/// Lees-Edwards boundaries in the lab-frame convention (docs/model.md §4.3): shear along `x`,
-/// gradient along `y`. The image across `y = L_y` is shifted by `shift` in `x` and moves
+/// How a Lees-Edwards box moves its particles and what their stored velocities mean
+/// (docs/model.md §4.3–4.5).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum ShearDynamics {
+    /// Lab frame (the default, §4.3): velocities are full velocities, `dv/dt = F/m`; images
+    /// across `y` move `±γ̇ L_y` along `x`, and contacts see the full relative velocity.
+    #[default]
+    Lab,
+    /// The lab-frame dynamics, but every contact subtracts the mean-flow difference
+    /// `γ̇ l_y x̂` of its two particles from its relative velocity (§4.4), for comparison.
+    PeculiarContacts,
+    /// Affine drag (§4.5, the dynamics of the source papers' code): velocities `c` are
+    /// relative to the mean flow and obey `dc/dt = F/m`; every free particle is moved by
+    /// `(c + γ̇ (y − lo_y) x̂) dt`; images carry no velocity jump and contacts see
+    /// `c_i − c_j`.
+    AffineDrag,
+}
+
+impl ShearDynamics {
+    /// Every option, in the order of the documentation.
+    pub const ALL: [ShearDynamics; 3] = [
+        ShearDynamics::Lab,
+        ShearDynamics::PeculiarContacts,
+        ShearDynamics::AffineDrag,
+    ];
+
+    /// The name used in scenario files and on the command line.
+    pub fn name(self) -> &'static str {
+        match self {
+            ShearDynamics::Lab => "lab",
+            ShearDynamics::PeculiarContacts => "peculiar-contacts",
+            ShearDynamics::AffineDrag => "affine-drag",
+        }
+    }
+}
+
+impl std::fmt::Display for ShearDynamics {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+impl std::str::FromStr for ShearDynamics {
+    type Err = String;
+
+    fn from_str(s: &str) -> Result<ShearDynamics, String> {
+        ShearDynamics::ALL
+            .into_iter()
+            .find(|d| d.name() == s)
+            .ok_or_else(|| {
+                format!(
+                    "unknown shear dynamics {s:?}: expected lab, peculiar-contacts or affine-drag"
+                )
+            })
+    }
+}
+
+/// Reads a name (`"affine-drag"`), or the boolean of the older key `peculiar_contacts`
+/// (`true` = [`ShearDynamics::PeculiarContacts`], `false` = [`ShearDynamics::Lab`]), so that
+/// files written before the three options existed still read the same.
+impl<'de> Deserialize<'de> for ShearDynamics {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<ShearDynamics, D::Error> {
+        struct Visitor;
+        impl serde::de::Visitor<'_> for Visitor {
+            type Value = ShearDynamics;
+            fn expecting(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+                f.write_str("\"lab\", \"peculiar-contacts\" or \"affine-drag\"")
+            }
+            fn visit_str<E: serde::de::Error>(self, v: &str) -> Result<ShearDynamics, E> {
+                v.parse().map_err(E::custom)
+            }
+            fn visit_bool<E: serde::de::Error>(self, v: bool) -> Result<ShearDynamics, E> {
+                Ok(if v {
+                    ShearDynamics::PeculiarContacts
+                } else {
+                    ShearDynamics::Lab
+                })
+            }
+        }
+        d.deserialize_any(Visitor)
+    }
+}
+
+/// Lees-Edwards boundaries (docs/model.md §4.3–4.5): shear along `x`, gradient along `y`.
+/// The image across `y = L_y` is shifted by `shift` in `x`; in the lab frame it also moves
 /// `γ̇ L_y` faster in `x`.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct LeesEdwards {
@@ -169,12 +254,10 @@ pub struct LeesEdwards {
     /// How often `shift` has been brought back into its range (each time the image codes
     /// of the neighbour list change meaning, so the list must be rebuilt).
     pub wraps: u64,
-    /// "Peculiar contacts", for comparison only (docs/model.md §4.4): relative velocities at
-    /// contacts exclude the mean-flow difference `γ̇ (y_i − y_j) x̂`, as in codes that move
-    /// particles affinely and integrate only velocities relative to the mean flow. The
-    /// default (false) is the lab frame, where damping and springs see the mean shear.
-    #[serde(default)]
-    pub peculiar_contacts: bool,
+    /// The dynamics of the sheared particles (default the lab frame). Also read from the
+    /// boolean `peculiar_contacts` of older checkpoints.
+    #[serde(default, alias = "peculiar_contacts")]
+    pub dynamics: ShearDynamics,
 }
 
 /// An axis-aligned box `[lo, hi]` with per-axis periodicity, optionally sheared by
@@ -245,7 +328,7 @@ impl Domain {
             shear_rate,
             shift: 0.0,
             wraps: 0,
-            peculiar_contacts: false,
+            dynamics: ShearDynamics::Lab,
         });
         self
     }
@@ -257,6 +340,66 @@ impl Domain {
         match &self.lees_edwards {
             Some(le) => DVec3::new(le.shear_rate * (r.y - self.lo.y), 0.0, 0.0),
             None => DVec3::ZERO,
+        }
+    }
+
+    /// The dynamics of the sheared particles ([`ShearDynamics::Lab`] without shear).
+    pub fn shear_dynamics(&self) -> ShearDynamics {
+        self.lees_edwards
+            .map_or(ShearDynamics::Lab, |le| le.dynamics)
+    }
+
+    /// True when the box itself moves the particles with the mean flow
+    /// ([`ShearDynamics::AffineDrag`]): stored velocities are then relative to it.
+    #[inline]
+    pub fn drags_affinely(&self) -> bool {
+        self.shear_dynamics() == ShearDynamics::AffineDrag
+    }
+
+    /// The velocity relative to the mean flow (m/s) of a particle at `r` with stored
+    /// velocity `v`: `v − γ̇ (y − lo_y) x̂` when stored velocities are full ones, `v` itself
+    /// under affine drag. Kinetic stress, granular temperature and speed limits use it.
+    #[inline]
+    pub fn peculiar_velocity(&self, r: DVec3, v: DVec3) -> DVec3 {
+        if self.drags_affinely() {
+            v
+        } else {
+            v - self.mean_flow(r)
+        }
+    }
+
+    /// The stored velocity (m/s) of a particle at `r` that moves with the mean flow plus
+    /// `peculiar` (the inverse of [`Domain::peculiar_velocity`]).
+    #[inline]
+    pub fn stored_velocity(&self, r: DVec3, peculiar: DVec3) -> DVec3 {
+        if self.drags_affinely() {
+            peculiar
+        } else {
+            peculiar + self.mean_flow(r)
+        }
+    }
+
+    /// The velocity in the lab (m/s) of a particle at `r` with stored velocity `v`: `v`
+    /// itself, or `v + γ̇ (y − lo_y) x̂` under affine drag.
+    #[inline]
+    pub fn lab_velocity(&self, r: DVec3, v: DVec3) -> DVec3 {
+        self.peculiar_velocity(r, v) + self.mean_flow(r)
+    }
+
+    /// Under affine drag, moves every free particle by the mean flow over `dt` (s),
+    /// `x += γ̇ (y − lo_y) dt`; does nothing otherwise.
+    pub fn drag_affinely(&self, positions: &mut [DVec3], free: impl Fn(usize) -> bool, dt: f64) {
+        let Some(le) = self
+            .lees_edwards
+            .filter(|le| le.dynamics == ShearDynamics::AffineDrag)
+        else {
+            return;
+        };
+        let (rate, lo_y) = (le.shear_rate * dt, self.lo.y);
+        for (i, r) in positions.iter_mut().enumerate() {
+            if free(i) {
+                r.x += rate * (r.y - lo_y);
+            }
         }
     }
 
@@ -284,7 +427,7 @@ impl Domain {
     /// relative velocity: non-zero only with peculiar contacts (docs/model.md §4.4).
     pub fn contact_flow_rate(&self) -> f64 {
         self.lees_edwards
-            .filter(|le| le.peculiar_contacts)
+            .filter(|le| le.dynamics == ShearDynamics::PeculiarContacts)
             .map_or(0.0, |le| le.shear_rate)
     }
 
@@ -334,7 +477,8 @@ impl Domain {
     }
 
     /// The current transformation of every image code. Under Lees-Edwards shear the images
-    /// across `y` are shifted by `c_y s` in `x` and move `c_y γ̇ L_y` faster in `x`.
+    /// across `y` are shifted by `c_y s` in `x` and, unless the particles are dragged
+    /// affinely (their velocities then exclude the mean flow), move `c_y γ̇ L_y` faster in `x`.
     /// A wedge's images are rotations by `c_x Φ` about `z`.
     pub fn image_transforms(&self) -> [ImageTransform; IMAGE_COUNT] {
         if let Some(w) = &self.wedge {
@@ -347,9 +491,14 @@ impl Domain {
             });
         }
         let l = self.lengths();
-        let (s, u) = self
-            .lees_edwards
-            .map_or((0.0, 0.0), |le| (le.shift, le.shear_rate * l.y));
+        let (s, u) = self.lees_edwards.map_or((0.0, 0.0), |le| {
+            let jump = if le.dynamics == ShearDynamics::AffineDrag {
+                0.0
+            } else {
+                le.shear_rate * l.y
+            };
+            (le.shift, jump)
+        });
         std::array::from_fn(|code| {
             let c = image_offsets(code as u8);
             let (cx, cy, cz) = (c[0] as f64, c[1] as f64, c[2] as f64);
@@ -363,7 +512,8 @@ impl Domain {
 
     /// Maps a particle back into the primary region and returns the map applied
     /// (`r' = R r + shift`). Along periodic axes the position is translated; crossing `y`
-    /// under Lees-Edwards shear also shifts `x` by `∓s` and `v_x` by `∓γ̇ L_y`; through a
+    /// under Lees-Edwards shear also shifts `x` by `∓s` and, with full stored velocities
+    /// (not under affine drag), `v_x` by `∓γ̇ L_y`; through a
     /// wedge face position, velocity and spin are rotated by a multiple of `Φ`.
     pub fn wrap(
         &self,
@@ -402,13 +552,18 @@ impl Domain {
     fn wrap_translation(&self, position: &mut DVec3, velocity: &mut DVec3) {
         let l = self.lengths();
         if let Some(le) = &self.lees_edwards {
+            let jump = if le.dynamics == ShearDynamics::AffineDrag {
+                0.0
+            } else {
+                le.shear_rate * l.y
+            };
             let mut k = ((position.y - self.lo.y) / l.y).floor();
             // One more crossing where rounding left y on the boundary.
             for _ in 0..3 {
                 if k != 0.0 {
                     position.y -= k * l.y;
                     position.x -= k * le.shift;
-                    velocity.x -= k * le.shear_rate * l.y;
+                    velocity.x -= k * jump;
                 }
                 k = if position.y >= self.hi.y {
                     1.0
@@ -437,16 +592,21 @@ impl Domain {
         }
     }
 
-    /// Scales the box along `y` about its lower corner by `factor`, with the `y` coordinates;
-    /// velocities relative to the mean flow are scaled along `y` and kept along `x` (the mean
-    /// flow `γ̇ (y − lo_y)` follows the moved coordinate).
+    /// Scales the box along `y` about its lower corner by `factor`, with the `y` coordinates.
+    /// With full stored velocities, the velocities relative to the mean flow are scaled along
+    /// `y` and kept along `x` (the mean flow `γ̇ (y − lo_y)` follows the moved coordinate).
+    /// Under affine drag the stored velocities are relative to the whole affine motion, box
+    /// rescaling included, and stay as they are.
     pub fn scale_y(&mut self, factor: f64, positions: &mut [DVec3], velocities: &mut [DVec3]) {
+        let affine = self.drags_affinely();
         let rate = self.lees_edwards.map_or(0.0, |le| le.shear_rate);
         for (r, v) in positions.iter_mut().zip(velocities.iter_mut()) {
             let dy = (r.y - self.lo.y) * (factor - 1.0);
             r.y += dy;
-            v.x += rate * dy;
-            v.y *= factor;
+            if !affine {
+                v.x += rate * dy;
+                v.y *= factor;
+            }
         }
         self.hi.y = self.lo.y + (self.hi.y - self.lo.y) * factor;
         self.deformation = DMat3::from_diagonal(DVec3::new(1.0, factor, 1.0)) * self.deformation;
@@ -513,6 +673,35 @@ mod tests {
         let (mut v, mut w) = (DVec3::ZERO, DVec3::ZERO);
         d.wrap(&mut r, &mut v, &mut w);
         assert_eq!(r, DVec3::new(1.5, 0.5, 3.0));
+    }
+
+    #[test]
+    fn shear_dynamics_reads_names_and_the_older_boolean() {
+        #[derive(Deserialize)]
+        struct T {
+            #[serde(alias = "peculiar_contacts")]
+            d: ShearDynamics,
+        }
+        let read = |text: &str| toml::from_str::<T>(text).map(|t| t.d);
+        for d in ShearDynamics::ALL {
+            assert_eq!(read(&format!("d = \"{d}\"")).expect("name"), d);
+            assert_eq!(d.name().parse::<ShearDynamics>().expect("parse"), d);
+        }
+        assert_eq!(
+            read("peculiar_contacts = true").expect("true"),
+            ShearDynamics::PeculiarContacts
+        );
+        assert_eq!(
+            read("peculiar_contacts = false").expect("false"),
+            ShearDynamics::Lab
+        );
+        let e = read("d = \"sllod\"").expect_err("unknown").to_string();
+        assert!(e.contains("sllod") && e.contains("affine-drag"), "{e}");
+        // Checkpoints (MessagePack, named fields) of either spelling read back.
+        let mut le = Domain::new(DVec3::ZERO, DVec3::ONE, [true; 3]).with_lees_edwards(2.0);
+        le.lees_edwards.as_mut().expect("sheared").dynamics = ShearDynamics::AffineDrag;
+        let bytes = rmp_serde::to_vec_named(&le).expect("encode");
+        assert_eq!(rmp_serde::from_slice::<Domain>(&bytes).expect("decode"), le);
     }
 
     #[test]

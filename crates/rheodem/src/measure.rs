@@ -164,13 +164,15 @@ impl Observables {
     }
 }
 
-/// Kinetic energies `(½ Σ m v², ½ Σ I ω²)` of the free particles (J).
-pub fn kinetic_energies(p: &Particles) -> (f64, f64) {
+/// Kinetic energies `(½ Σ m v², ½ Σ I ω²)` of the free particles (J), `v` the velocity in
+/// the lab ([`Domain::lab_velocity`]).
+pub fn kinetic_energies(p: &Particles, domain: &Domain) -> (f64, f64) {
     let mut trans = 0.0;
     let mut rot = 0.0;
     for i in 0..p.len() {
         if p.motion[i].is_free() {
-            trans += 0.5 * p.mass[i] * p.velocity[i].length_squared();
+            let v = domain.lab_velocity(p.position[i], p.velocity[i]);
+            trans += 0.5 * p.mass[i] * v.length_squared();
             rot += 0.5 / p.inv_inertia[i] * p.angular_velocity[i].length_squared();
         }
     }
@@ -178,12 +180,12 @@ pub fn kinetic_energies(p: &Particles) -> (f64, f64) {
 }
 
 /// Kinetic stress sum `Σ m v' ⊗ v'` over free particles (kg m²/s²), `v'` the velocity
-/// relative to the domain's mean flow.
+/// relative to the domain's mean flow ([`Domain::peculiar_velocity`]).
 pub fn kinetic_stress_sum(p: &Particles, domain: &Domain) -> DMat3 {
     let mut s = DMat3::ZERO;
     for i in 0..p.len() {
         if p.motion[i].is_free() {
-            let v = p.velocity[i] - domain.mean_flow(p.position[i]);
+            let v = domain.peculiar_velocity(p.position[i], p.velocity[i]);
             s += outer(v * p.mass[i], v);
         }
     }
@@ -195,7 +197,9 @@ pub fn granular_temperature(p: &Particles, domain: &Domain) -> f64 {
     let (mut sum, mut n) = (0.0, 0usize);
     for i in 0..p.len() {
         if p.motion[i].is_free() {
-            sum += (p.velocity[i] - domain.mean_flow(p.position[i])).length_squared();
+            sum += domain
+                .peculiar_velocity(p.position[i], p.velocity[i])
+                .length_squared();
             n += 1;
         }
     }

@@ -155,7 +155,7 @@ pub fn check(
     let fastest = (0..particles.len())
         .filter(|&i| particles.motion[i].is_free())
         .map(|i| {
-            let v = particles.velocity[i] - domain.mean_flow(particles.position[i]);
+            let v = domain.peculiar_velocity(particles.position[i], particles.velocity[i]);
             (v.length(), i)
         })
         .fold((0.0, usize::MAX), |a, b| if b.0 > a.0 { b } else { a });

@@ -161,9 +161,16 @@ impl Simulation {
         Ok(())
     }
 
-    /// First half of a step: half kick, drift, advance the clock.
+    /// First half of a step: half kick, drift (with the affine drag of the mean flow under
+    /// [`crate::domain::ShearDynamics::AffineDrag`]), advance the clock.
     pub fn begin_step(&mut self) {
         kick_drift(&mut self.particles, 0.5 * self.dt, self.dt);
+        let motion = &self.particles.motion;
+        self.domain.drag_affinely(
+            &mut self.particles.position,
+            |i| motion[i].is_free(),
+            self.dt,
+        );
         self.domain.advance(self.dt);
         if let Some(control) = &self.stress_control {
             control.apply(
@@ -354,7 +361,7 @@ impl Simulation {
     /// taken with `measure = true` (see [`Simulation::measured_step`]).
     pub fn observables(&self) -> Observables {
         let p = &self.particles;
-        let (kt, kr) = kinetic_energies(p);
+        let (kt, kr) = kinetic_energies(p, &self.domain);
         let sums = &self.measured.1;
         let volume = self.domain.volume();
         let stress = (kinetic_stress_sum(p, &self.domain) + sums.stress_sum) / volume;

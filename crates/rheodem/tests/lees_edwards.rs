@@ -10,9 +10,11 @@
 //!   damped law with rolling and torsion, and for a damped normal law alone, both for grains
 //!   moving with the mean flow (relative velocity across the boundary small) and for grains
 //!   at rest in the lab (relative velocity `−γ̇ L_y`); over a whole collision with list
-//!   rebuilds and a crossing in between; in the lab-frame convention and in the
-//!   comparison option `peculiar_contacts` (docs/model.md §4.4: contacts subtract
-//!   `γ̇ l_y x̂`, `l` the branch vector through the image).
+//!   rebuilds and a crossing in between; in each of the three shear dynamics: the lab
+//!   frame, peculiar contacts (docs/model.md §4.4: contacts subtract `γ̇ l_y x̂`, `l` the
+//!   branch vector through the image) and affine drag (§4.5: stored velocities exclude the
+//!   mean flow, the image carries no velocity jump, the box moves the particles with the
+//!   flow). `tests/affine_drag.rs` tests the rest of affine drag.
 //! * **Newton's third law.** The total force on the free particles of a sheared dense box is
 //!   zero to rounding; `Σ m (v_x − γ̇ (y − lo_y))`, `Σ m v_y`, `Σ m v_z` are conserved to
 //!   rounding (the plain `Σ m v_x` jumps by `m γ̇ L_y` at every crossing; that is no error).
@@ -31,7 +33,7 @@ use glam::DVec3;
 use rheodem::Simulation;
 use rheodem::bench::{BenchCohesion, standard_problem};
 use rheodem::contact::{ContactHistory, ContactLaw, PairKinematics, Resistance};
-use rheodem::domain::Domain;
+use rheodem::domain::{Domain, ShearDynamics};
 use rheodem::measure::kinetic_stress_sum;
 use rheodem::particles::Sphere;
 use rheodem::stress_control::StressControl;
@@ -122,7 +124,8 @@ struct PairSetUp {
 /// Builds the pair in `domain`: `i` at `y = hi_y − 0.01 a_i`, the branch vector
 /// `r_i − r_j' = (a_i + a_j − δ) n` (`n_y < 0`: `j`'s image `r_j' = r_j + (s, L_y, 0)` lies
 /// above the top face), and the same pair centred in the box with the same relative
-/// velocity `v_i − (v_j + γ̇ L_y x̂)`.
+/// velocity `v_i − (v_j + γ̇ L_y x̂)` (in the lab; stored velocities follow the domain's
+/// shear dynamics, and under affine drag the image's stored velocity has no jump).
 fn pair_set_up(domain: &Domain, motion: Motion, seed: u64, place: Placement) -> PairSetUp {
     let mut rng = rng(seed);
     let (a_i, a_j) = (A_REF * 1.13, A_REF * 0.91);
@@ -152,8 +155,14 @@ fn pair_set_up(domain: &Domain, motion: Motion, seed: u64, place: Placement) -> 
     let u_i = DVec3::new(0.004, 0.012, -0.003) + random_vec(&mut rng, 0.002);
     let u_j = u_i + n * 0.02 + random_vec(&mut rng, 0.003);
     let (v_i, v_j) = match motion {
-        Motion::MeanFlow => (domain.mean_flow(r_i) + u_i, domain.mean_flow(r_j) + u_j),
-        Motion::LabRest => (u_i, u_j),
+        Motion::MeanFlow => (
+            domain.stored_velocity(r_i, u_i),
+            domain.stored_velocity(r_j, u_j),
+        ),
+        Motion::LabRest => (
+            domain.stored_velocity(r_i, u_i - domain.mean_flow(r_i)),
+            domain.stored_velocity(r_j, u_j - domain.mean_flow(r_j)),
+        ),
     };
     let w_i = random_vec(&mut rng, 20.0);
     let w_j = random_vec(&mut rng, 20.0);
@@ -162,7 +171,12 @@ fn pair_set_up(domain: &Domain, motion: Motion, seed: u64, place: Placement) -> 
         s.angular_velocity = w;
         s
     };
-    let image_velocity = v_j + DVec3::new(RATE * l.y, 0.0, 0.0);
+    let jump = if domain.drags_affinely() {
+        0.0
+    } else {
+        RATE * l.y
+    };
+    let image_velocity = v_j + DVec3::new(jump, 0.0, 0.0);
     let centre = domain.lo + 0.5 * l;
     PairSetUp {
         across: [mk(r_i, v_i, w_i, a_i), mk(r_j, v_j, w_j, a_j)],
@@ -248,12 +262,15 @@ fn pair_across_moving_boundary_matches_pair_inside() {
     ];
     let mut worst = (0.0f64, 0.0f64, 0.0f64, 0.0f64);
     let mut codes = HashSet::new();
-    for ((name, law), peculiar) in laws.into_iter().flat_map(|l| [(l, false), (l, true)]) {
+    for ((name, law), dynamics) in laws
+        .into_iter()
+        .flat_map(|l| ShearDynamics::ALL.map(|d| (l, d)))
+    {
         let dt = contact_time(&law, A_REF) / 50.0;
         for (k, fraction) in [0.37, 0.8].into_iter().enumerate() {
             let mut domain = sheared_box(fraction);
             if let Some(le) = &mut domain.lees_edwards {
-                le.peculiar_contacts = peculiar;
+                le.dynamics = dynamics;
             }
             for motion in [Motion::MeanFlow, Motion::LabRest] {
                 for (m, place) in [Placement::Middle, Placement::AcrossX, Placement::AcrossZ]
@@ -268,11 +285,10 @@ fn pair_across_moving_boundary_matches_pair_inside() {
                     let (f0, t0, fm, tm) = record_error(&across[..1], &inside[..1]);
                     let (ef, et, _, _) = record_error(&across, &inside);
                     eprintln!(
-                        "[{name}{}] s = {:+.3} L_x, {motion:?}, {place:?}: \
+                        "[{name}, {dynamics}] s = {:+.3} L_x, {motion:?}, {place:?}: \
                          first evaluation |ΔF|/F = {f0:.2e}, |ΔT|/T = {t0:.2e}; \
                          200 steps |ΔF|/F_max = {ef:.2e}, |ΔT|/T_max = {et:.2e} \
                          (F_max = {fm:.3e} N, T_max = {tm:.3e} N m)",
-                        if peculiar { ", peculiar contacts" } else { "" },
                         shift(&domain) / SIZE.x
                     );
                     assert!(fm > 0.0, "the pair must be in contact");

@@ -248,6 +248,22 @@ fn malformed_scenarios_name_the_key_and_range() {
             ),
             &["stress_control", "shear_rate"],
         ),
+        (
+            "unknown shear dynamics",
+            (
+                "periodic = [true, true, true]",
+                "periodic = [true, true, true]\nshear_rate = 1.0\nshear_dynamics = \"sllod\"",
+            ),
+            &["sllod", "lab, peculiar-contacts or affine-drag"],
+        ),
+        (
+            "shear dynamics without shear",
+            (
+                "periodic = [true, true, true]",
+                "periodic = [true, true, true]\nshear_dynamics = \"affine-drag\"",
+            ),
+            &["domain.shear_dynamics", "affine-drag", "shear_rate"],
+        ),
     ];
     for (what, (from, to), needles) in cases {
         assert!(VALID.contains(from), "case `{what}`: pattern not in VALID");

@@ -5,7 +5,7 @@ use super::spec::*;
 use super::{ScenarioError, invalid};
 use crate::Simulation;
 use crate::contact::{Adhesion, ContactLaw, ContactTable, Damping, NormalLaw, Resistance};
-use crate::domain::Domain;
+use crate::domain::{Domain, ShearDynamics};
 use crate::generate::{
     MAX_INSERTION_FRACTION, Obstacle, Rng, gaussian_vector, insert_random, polydisperse_radii,
 };
@@ -1143,6 +1143,13 @@ fn initial_state(
 
 /// Lees-Edwards shear and stress control, after the preparation.
 fn configure_flow(s: &Scenario, simulation: &mut Simulation) -> Result<(), ScenarioError> {
+    if s.domain.shear_rate.is_none() && s.domain.shear_dynamics != ShearDynamics::Lab {
+        return Err(invalid(
+            "domain.shear_dynamics",
+            s.domain.shear_dynamics,
+            "needs domain.shear_rate (a Lees-Edwards box)",
+        ));
+    }
     if let Some(rate) = s.domain.shear_rate {
         if !rate.is_finite() {
             return Err(invalid("domain.shear_rate", rate, "must be finite (1/s)"));
@@ -1156,12 +1163,13 @@ fn configure_flow(s: &Scenario, simulation: &mut Simulation) -> Result<(), Scena
         }
         simulation.domain = simulation.domain.clone().with_lees_edwards(rate);
         if let Some(le) = &mut simulation.domain.lees_edwards {
-            le.peculiar_contacts = s.domain.peculiar_contacts;
+            le.dynamics = s.domain.shear_dynamics;
         }
-        let p = &mut simulation.particles;
+        // The prepared velocities become those relative to the mean flow.
+        let (p, domain) = (&mut simulation.particles, &simulation.domain);
         for i in 0..p.len() {
             if p.motion[i].is_free() {
-                p.velocity[i].x += rate * (p.position[i].y - simulation.domain.lo.y);
+                p.velocity[i] = domain.stored_velocity(p.position[i], p.velocity[i]);
             }
         }
         // The list stays valid: the shift starts at zero, so images keep their meaning.

@@ -23,6 +23,7 @@
 //! duration = 0.05
 //! ```
 
+use crate::domain::ShearDynamics;
 use serde::{Deserialize, Serialize};
 
 /// A whole scenario.
@@ -98,14 +99,15 @@ pub struct DomainSpec {
     #[serde(default, deserialize_with = "three")]
     pub periodic: [bool; 3],
     /// Lees-Edwards shear rate `γ̇` (1/s): shear along `x`, gradient `y`, switched on after
-    /// the preparation with the affine profile `v_x += γ̇ (y − lo_y)` (needs `x`, `y`
-    /// periodic).
+    /// the preparation with the affine profile `v_x += γ̇ (y − lo_y)` (in the lab frame;
+    /// under affine drag the box moves the particles with it) (needs `x`, `y` periodic).
     #[serde(default)]
     pub shear_rate: Option<f64>,
-    /// Peculiar contacts, for comparison (docs/model.md §4.4): contacts ignore the mean-flow
-    /// difference in their relative velocity (default false: the lab frame, §4.3).
-    #[serde(default)]
-    pub peculiar_contacts: bool,
+    /// The dynamics of the sheared box (docs/model.md §4.3–4.5): `"lab"` (the default),
+    /// `"peculiar-contacts"` or `"affine-drag"`. The older boolean key `peculiar_contacts`
+    /// is read as `"peculiar-contacts"` (true) or `"lab"` (false).
+    #[serde(default, alias = "peculiar_contacts")]
+    pub shear_dynamics: ShearDynamics,
 }
 
 /// A material.

@@ -14,6 +14,7 @@
 //! check applied (no fitted law for the point's `μ_p`).
 
 use super::sweep::PointResult;
+use crate::domain::ShearDynamics;
 use crate::plot::{Labels, Markers, Series, plot_svg};
 use crate::rheology::{MuLaw, PhiLaw};
 use std::fmt::Write;
@@ -80,7 +81,7 @@ pub fn comparison_markdown(results: &[PointResult]) -> String {
                     && q.spec.softness == p.softness
                     && q.spec.polydispersity == p.polydispersity
                     && q.spec.particles == p.particles
-                    && q.spec.peculiar_contacts == p.peculiar_contacts
+                    && q.spec.shear_dynamics == p.shear_dynamics
             });
             match reference.and_then(|q| q.steady_state.as_ref()) {
                 Some(r0) => {
@@ -122,10 +123,9 @@ pub fn comparison_markdown(results: &[PointResult]) -> String {
         }
         let pct = |x: Option<f64>| x.map_or("–".to_string(), |v| format!("{:+.2} %", 100.0 * v));
         let num = |x: Option<f64>, d: usize| x.map_or("–".to_string(), |v| format!("{v:.d$}"));
-        let law = if p.peculiar_contacts {
-            format!("{:?}, seed-code convention", p.cohesion)
-        } else {
-            format!("{:?}", p.cohesion)
+        let law = match p.shear_dynamics {
+            ShearDynamics::Lab => format!("{:?}", p.cohesion),
+            d => format!("{:?}, {d}", p.cohesion),
         };
         if phi_seed.is_none() {
             notes.push("no fitted law for this μ_p");
@@ -170,10 +170,15 @@ pub fn comparison_markdown(results: &[PointResult]) -> String {
 type MeasuredPoints = Vec<(f64, f64, f64)>;
 
 /// The points of the validation figures: measured points against the laws of Shi et al. 2020.
-const FIGURE_GROUPS: [(f64, bool, &str); 3] = [
-    (0.01, false, "μ_p = 0.01"),
-    (0.5, false, "μ_p = 0.5"),
-    (0.5, true, "μ_p = 0.5, seed-code convention"),
+const FIGURE_GROUPS: [(f64, ShearDynamics, &str); 4] = [
+    (0.01, ShearDynamics::Lab, "μ_p = 0.01"),
+    (0.5, ShearDynamics::Lab, "μ_p = 0.5"),
+    (
+        0.5,
+        ShearDynamics::PeculiarContacts,
+        "μ_p = 0.5, peculiar contacts",
+    ),
+    (0.5, ShearDynamics::AffineDrag, "μ_p = 0.5, affine drag"),
 ];
 
 /// One validation figure: which points, which axes, which law.
@@ -268,17 +273,18 @@ const FIGURES: [Figure; 5] = [
 
 /// The validation figures (file name, SVG document): measured steady states with their
 /// standard errors against the laws of Shi et al. 2020, one colour per `μ_p` (and one for
-/// peculiar contacts, labelled "seed-code convention"; docs/model.md §4.4). Where several
+/// each other shear dynamics, docs/model.md §4.4–4.5; the laws are drawn for the lab
+/// frame's groups). Where several
 /// runs share a point, the longest is shown. Figures without any measured point are left
 /// out.
 pub fn comparison_figures(results: &[PointResult]) -> Result<Vec<(&'static str, String)>, String> {
     let mut out = Vec::new();
     for fig in &FIGURES {
         let mut markers: Vec<(&str, MeasuredPoints)> = Vec::new();
-        for &(mu_p, peculiar, label) in &FIGURE_GROUPS {
+        for &(mu_p, dynamics, label) in &FIGURE_GROUPS {
             let mut chosen: Vec<&PointResult> = Vec::new();
             for r in results.iter().filter(|r| {
-                r.spec.mu_p == mu_p && r.spec.peculiar_contacts == peculiar && (fig.selects)(r)
+                r.spec.mu_p == mu_p && r.spec.shear_dynamics == dynamics && (fig.selects)(r)
             }) {
                 match chosen.iter_mut().find(|c| (fig.x)(c) == (fig.x)(r)) {
                     Some(c) if c.spec.strain < r.spec.strain => *c = r,
@@ -298,7 +304,7 @@ pub fn comparison_figures(results: &[PointResult]) -> Result<Vec<(&'static str, 
         }
         let curves: Vec<(String, Vec<(f64, f64)>)> = FIGURE_GROUPS
             .iter()
-            .filter(|(_, peculiar, _)| !peculiar)
+            .filter(|(_, dynamics, _)| *dynamics == ShearDynamics::Lab)
             .map(|&(mu_p, _, label)| {
                 let (a, b) = fig.range;
                 let points = (0..=60)

@@ -13,6 +13,7 @@
 //! profile `v_x = γ̇ (y − lo_y)` under σ_yy control.
 
 use crate::analysis::{Estimate, block_average, halves_agree};
+use crate::domain::ShearDynamics;
 use crate::measure::Observables;
 use crate::scenario::spec::*;
 use crate::scenario::{ScenarioError, invalid};
@@ -140,10 +141,11 @@ pub struct ShearBoxSpec {
     /// Checkpoints over the run.
     #[serde(default = "default_checkpoints")]
     pub checkpoints: u64,
-    /// Peculiar contacts, for comparison only: contact relative velocities exclude the
-    /// mean-flow difference (default false: lab frame; docs/model.md §4.3–4.4).
-    #[serde(default)]
-    pub peculiar_contacts: bool,
+    /// Shear dynamics (docs/model.md §4.3–4.5): `"lab"` (default), `"peculiar-contacts"`
+    /// (lab dynamics, contacts without the mean-flow difference) or `"affine-drag"` (the
+    /// source papers' code). The older boolean `peculiar_contacts` reads as the first two.
+    #[serde(default, alias = "peculiar_contacts")]
+    pub shear_dynamics: ShearDynamics,
 }
 
 /// SI values derived from a [`ShearBoxSpec`].
@@ -356,7 +358,7 @@ impl ShearBoxSpec {
                 size: Some([edge; 3]),
                 periodic: [true; 3],
                 shear_rate: Some(dv.shear_rate),
-                peculiar_contacts: self.peculiar_contacts,
+                shear_dynamics: self.shear_dynamics,
             },
             species: vec![SpeciesSpec {
                 name: "grain".into(),

@@ -25,6 +25,7 @@
 //! points take `inertial`, `softness` and `cohesion` from `[base]`.
 
 use super::shear_box::{ShearBoxSpec, SteadyState, steady_state};
+use crate::domain::ShearDynamics;
 use crate::io::atomic::write_atomic;
 use crate::run::{Run, RunError, io_err};
 use crate::scenario::{ScenarioError, invalid};
@@ -108,10 +109,10 @@ pub fn expand(spec: &SweepSpec) -> Result<Vec<(String, ShearBoxSpec)>, ScenarioE
             point.seed
         )
         .to_lowercase()
-            + if point.peculiar_contacts {
-                "_peculiar"
-            } else {
-                ""
+            + match point.shear_dynamics {
+                ShearDynamics::Lab => "",
+                ShearDynamics::PeculiarContacts => "_peculiar",
+                ShearDynamics::AffineDrag => "_affine",
             };
         if out.iter().any(|(n, _)| *n == name) {
             return Err(invalid(
