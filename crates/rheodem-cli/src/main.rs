@@ -2,6 +2,7 @@
 
 mod cg;
 mod contact;
+mod predict;
 mod shear;
 mod split_bottom;
 
@@ -84,6 +85,9 @@ enum Command {
         #[arg(long)]
         figures: Option<PathBuf>,
     },
+    /// The laws fitted by Shi et al. 2020 at one state point: φ, μ, Δφ and the regime of
+    /// the (μ_p, Bo) phase diagram (docs/model.md §8).
+    Predict(predict::PredictArgs),
     /// Contact-law tools: force–overlap curves, equivalent linear model.
     #[command(subcommand)]
     Contact(contact::ContactCommand),
@@ -280,6 +284,7 @@ fn run(cli: Cli) -> Result<()> {
             advance(&pool, &mut r, &dir, quiet)
         }
         Command::Contact(cmd) => contact::run(cmd),
+        Command::Predict(args) => predict::run(&args),
         Command::ShearBox(args) => shear::shear_box(args),
         Command::Sweep { file, jobs, quiet } => shear::sweep(&file, jobs, quiet),
         Command::Compare { dir, figures } => shear::compare(&dir, figures.as_deref()),

@@ -220,3 +220,56 @@ fn sweep_archives_finished_points_and_does_not_rerun_them() {
     assert_eq!(rebuilt, table);
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// `predict` prints the tabulated laws at a point (the numbers of Eq. 16 and Eq. 1A with the
+/// shipped tables), JSON on request, and names a bad argument.
+#[test]
+fn predict_prints_the_laws_and_names_bad_arguments() {
+    let out = rheodem(&[
+        "predict",
+        "--mu-p",
+        "0.5",
+        "--inertial",
+        "0.02",
+        "--softness",
+        "0.01",
+    ]);
+    assert!(out.status.success());
+    let text = String::from_utf8_lossy(&out.stdout);
+    // φ = 0.595 (1 − 0.02/5.383)(1 + 0.01/0.287) = 0.6134; regime (iii).
+    assert!(text.contains("φ  = 0.6134"), "{text}");
+    assert!(text.contains("regime (iii)"), "{text}");
+    let out = rheodem(&[
+        "predict",
+        "--mu-p",
+        "0.3",
+        "--inertial",
+        "0.02",
+        "--softness",
+        "0.01",
+        "--bond",
+        "3",
+        "--json",
+    ]);
+    assert!(out.status.success());
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON");
+    assert_eq!(v["regime"], "Reentrant");
+    assert!(v["mu"].is_null(), "no Table 7 row at μ_p = 0.3");
+    let dphi = v["delta_phi"]["value"].as_f64().expect("Δφ");
+    assert!((dphi - -0.0072).abs() < 1e-4, "Δφ = {dphi}");
+    let out = rheodem(&[
+        "predict",
+        "--mu-p",
+        "0.3",
+        "--inertial",
+        "-0.02",
+        "--softness",
+        "0.01",
+    ]);
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("inertial = -0.02") && err.contains("> 0"),
+        "{err}"
+    );
+}
