@@ -88,6 +88,12 @@ enum Command {
     /// The laws fitted by Shi et al. 2020 at one state point: φ, μ, Δφ and the regime of
     /// the (μ_p, Bo) phase diagram (docs/model.md §8).
     Predict(predict::PredictArgs),
+    /// Fit the laws of Shi et al. 2020 to the finished points of a sweep directory, per μ_p
+    /// and shear dynamics, in the layout of the paper's Tables 3, 5, 7 and 8 (markdown).
+    Fit {
+        /// The sweep's output directory (or its results archive).
+        dir: PathBuf,
+    },
     /// Contact-law tools: force–overlap curves, equivalent linear model.
     #[command(subcommand)]
     Contact(contact::ContactCommand),
@@ -285,6 +291,7 @@ fn run(cli: Cli) -> Result<()> {
         }
         Command::Contact(cmd) => contact::run(cmd),
         Command::Predict(args) => predict::run(&args),
+        Command::Fit { dir } => shear::fit(&dir),
         Command::ShearBox(args) => shear::shear_box(args),
         Command::Sweep { file, jobs, quiet } => shear::sweep(&file, jobs, quiet),
         Command::Compare { dir, figures } => shear::compare(&dir, figures.as_deref()),

@@ -423,9 +423,9 @@ fn point_progress(point: &Path) -> String {
     }
 }
 
-/// Runs `compare`: the validation table of a sweep directory, plus the progress of the
-/// points still running; with `figures`, the validation figures written there as SVG.
-pub fn compare(dir: &Path, figures: Option<&Path>) -> Result<()> {
+/// The finished points of a sweep directory (its archive and its point directories) and a
+/// progress line for each point still running.
+fn load_results(dir: &Path) -> Result<(Vec<PointResult>, Vec<String>)> {
     if dir.join("checkpoint.bin").exists() {
         bail!(
             "{} is the directory of a single run, not of a sweep: give the `out` directory \
@@ -465,6 +465,13 @@ pub fn compare(dir: &Path, figures: Option<&Path>) -> Result<()> {
             dir.display()
         );
     }
+    Ok((finished, running))
+}
+
+/// Runs `compare`: the validation table of a sweep directory, plus the progress of the
+/// points still running; with `figures`, the validation figures written there as SVG.
+pub fn compare(dir: &Path, figures: Option<&Path>) -> Result<()> {
+    let (finished, running) = load_results(dir)?;
     print!(
         "{}",
         rheodem::setups::compare::comparison_markdown(&finished)
@@ -482,6 +489,17 @@ pub fn compare(dir: &Path, figures: Option<&Path>) -> Result<()> {
     }
     if !running.is_empty() {
         println!("\nNot finished:\n{}", running.join("\n"));
+    }
+    Ok(())
+}
+
+/// Runs `fit`: the laws of Shi et al. 2020 fitted to the finished points of a sweep
+/// directory, per `μ_p` and shear dynamics, in the layout of the paper's tables (markdown).
+pub fn fit(dir: &Path) -> Result<()> {
+    let (finished, running) = load_results(dir)?;
+    print!("{}", rheodem::setups::law_fits::fit_tables(&finished));
+    if !running.is_empty() {
+        println!("\nNot finished (left out):\n{}", running.join("\n"));
     }
     Ok(())
 }

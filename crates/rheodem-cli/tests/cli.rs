@@ -273,3 +273,33 @@ fn predict_prints_the_laws_and_names_bad_arguments() {
         "{err}"
     );
 }
+
+/// `fit` on the committed validation archive: the μ_p = 0.01 lab-frame points determine
+/// Table 3's coefficients, printed above the paper's row; groups with too few points say so.
+#[test]
+fn fit_tabulates_the_archive_against_the_paper() {
+    let out = rheodem(&["fit", "validation/results"]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(text.contains("## Shear dynamics: lab"), "{text}");
+    let row = text
+        .lines()
+        .find(|l| l.starts_with("| 0.01 | this work (lab) | 0.65"))
+        .unwrap_or_else(|| panic!("no fitted φ_0 ≈ 0.65 row at μ_p = 0.01:\n{text}"));
+    assert!(row.contains(" ± "), "{row}");
+    assert!(
+        text.contains("| 0.01 | Shi et al. 2020 | 0.653 | 2.246 | 0.272 |"),
+        "{text}"
+    );
+    assert!(
+        text.contains("at least"),
+        "the thin groups say what they lack: {text}"
+    );
+    let out = rheodem(&["fit", "examples"]);
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("no sweep results"));
+}

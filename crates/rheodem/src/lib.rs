@@ -54,6 +54,7 @@ pub mod bench;
 pub mod cg;
 pub mod contact;
 pub mod domain;
+pub mod fit;
 pub mod forces;
 pub mod generate;
 pub mod integrate;

@@ -12,6 +12,7 @@
 //! The three regimes of the relative dilation `Δφ = φ(Bo) − φ(0)` over `(μ_p, Bo)`
 //! (Sect. 3.3, Fig. 11): [`Regime`].
 
+pub mod fitting;
 pub mod predict;
 mod tables;
 

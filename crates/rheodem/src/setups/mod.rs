@@ -1,6 +1,7 @@
 //! Builders of the standard set-ups.
 
 pub mod compare;
+pub mod law_fits;
 pub mod shear_box;
 pub mod split_bottom;
 pub mod split_bottom_fields;

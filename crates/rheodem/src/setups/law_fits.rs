@@ -1,0 +1,246 @@
+//! The laws of Shi et al. 2020 fitted to a sweep's finished shear-box points
+//! (`rheodem fit`; docs/model.md §8.6): one group per `μ_p` and shear dynamics, the fits of
+//! `rheology::fitting` in the paper's order, and the tables in the paper's layout.
+
+use super::sweep::PointResult;
+use crate::domain::ShearDynamics;
+use crate::rheology::fitting::{
+    CoefficientFit, FitRange, MeasuredPoint, coefficient_table, fit_cohesion_factor,
+    fit_friction_dependence, fit_mu_cohesion, fit_mu_law, fit_phi_law, paper_table3, paper_table5,
+    paper_table7, paper_table7_cohesion,
+};
+use crate::rheology::{CohesionFactor, MuLaw, PhiLaw, SetUp, friction_dependences};
+use std::fmt::Write;
+
+/// The steady states of `results` as fit points, grouped by `(shear dynamics, μ_p)` in that
+/// order. Points without a steady state are left out; where several runs share a state
+/// point (same `μ_p, I, p*, Bo`, cohesion law, dynamics, size and polydispersity), the one
+/// averaged over the most strain is kept.
+pub fn fit_groups(results: &[PointResult]) -> Vec<(ShearDynamics, f64, Vec<MeasuredPoint>)> {
+    let mut chosen: Vec<&PointResult> = Vec::new();
+    for r in results.iter().filter(|r| r.steady_state.is_some()) {
+        let same = |c: &&PointResult| {
+            let (a, b) = (&c.spec, &r.spec);
+            a.mu_p == b.mu_p
+                && a.inertial == b.inertial
+                && a.softness == b.softness
+                && a.bond == b.bond
+                && a.cohesion == b.cohesion
+                && a.shear_dynamics == b.shear_dynamics
+                && a.particles == b.particles
+                && a.polydispersity == b.polydispersity
+        };
+        match chosen.iter_mut().find(|c| same(c)) {
+            Some(c)
+                if c.spec.strain - c.spec.transient_strain
+                    < r.spec.strain - r.spec.transient_strain =>
+            {
+                *c = r
+            }
+            Some(_) => {}
+            None => chosen.push(r),
+        }
+    }
+    let mut groups: Vec<(ShearDynamics, f64, Vec<MeasuredPoint>)> = Vec::new();
+    for r in chosen {
+        let ss = r.steady_state.as_ref().expect("filtered");
+        let point = MeasuredPoint {
+            mu_p: r.spec.mu_p,
+            inertial: ss.inertial_measured,
+            softness: ss.softness_measured,
+            bond: ss.bond_measured,
+            phi: (ss.volume_fraction.mean, ss.volume_fraction.error),
+            mu: (ss.friction.mean, ss.friction.error),
+        };
+        let key = (r.spec.shear_dynamics, r.spec.mu_p);
+        match groups.iter_mut().find(|g| (g.0, g.1) == key) {
+            Some(g) => g.2.push(point),
+            None => groups.push((key.0, key.1, vec![point])),
+        }
+    }
+    let rank = |d: ShearDynamics| ShearDynamics::ALL.iter().position(|&x| x == d);
+    groups.sort_by(|a, b| rank(a.0).cmp(&rank(b.0)).then(a.1.total_cmp(&b.1)));
+    groups
+}
+
+/// Fitted `φ` laws of one group, where its points determine them.
+struct GroupFits {
+    phi: Option<CoefficientFit>,
+    gc: Option<CoefficientFit>,
+    mu: Option<CoefficientFit>,
+    mu_cohesion: Option<CoefficientFit>,
+    /// Why a fit was not made, one line per fit.
+    notes: Vec<String>,
+}
+
+fn fit_group(mu_p: f64, points: &[MeasuredPoint]) -> GroupFits {
+    let mut notes = Vec::new();
+    let mut keep = |what: &str, r: Result<CoefficientFit, crate::fit::FitError>| match r {
+        Ok(f) => Some(f),
+        Err(e) => {
+            notes.push(format!("μ_p = {mu_p}, {what}: {e}"));
+            None
+        }
+    };
+    let phi = keep("φ_0, I_φ, p*_φ", fit_phi_law(points, &FitRange::PHI));
+    let cohesive = points.iter().filter(|p| p.bond > 0.0).count();
+    let gc = match (&phi, cohesive) {
+        (Some(f), c) if c > 0 => {
+            let base = PhiLaw {
+                mu_p,
+                phi_0: f.fit.params[0],
+                i_phi: f.fit.params[1],
+                p_phi: f.fit.params[2],
+                gc: [0.0; 4],
+            };
+            keep(
+                "p₁ … p₄",
+                fit_cohesion_factor(points, &FitRange::PHI, &base),
+            )
+        }
+        _ => None,
+    };
+    let mu = keep("μ_0, μ_∞, I_μ, p*_μ", fit_mu_law(points, &FitRange::MU));
+    let mu_cohesion = match (&mu, cohesive) {
+        (Some(f), c) if c > 0 => {
+            let base = MuLaw {
+                mu_p,
+                setup: SetUp::SimpleShear,
+                mu_0: f.fit.params[0],
+                mu_inf: f.fit.params[1],
+                i_mu: f.fit.params[2],
+                p_mu: f.fit.params[3],
+                cohesion: CohesionFactor::Linear { slope: 0.0 },
+                linear_slope: None,
+            };
+            keep("α₁, β₁", fit_mu_cohesion(points, &FitRange::MU, &base))
+        }
+        _ => None,
+    };
+    GroupFits {
+        phi,
+        gc,
+        mu,
+        mu_cohesion,
+        notes,
+    }
+}
+
+/// The fitted coefficients of every group as markdown tables laid out like Shi et al.
+/// 2020, Tables 3, 5, 7 and (with fits at three or more `μ_p`) 8, each fitted row followed
+/// by the paper's row for the same `μ_p`; then the fits that could not be made, and why.
+pub fn fit_tables(results: &[PointResult]) -> String {
+    let mut s = String::new();
+    let groups = fit_groups(results);
+    if groups.is_empty() {
+        return "No finished point with a steady state to fit.\n".into();
+    }
+    for dynamics in ShearDynamics::ALL {
+        let fits: Vec<(f64, GroupFits)> = groups
+            .iter()
+            .filter(|g| g.0 == dynamics)
+            .map(|g| (g.1, fit_group(g.1, &g.2)))
+            .collect();
+        if fits.is_empty() {
+            continue;
+        }
+        let counts: Vec<String> = groups
+            .iter()
+            .filter(|g| g.0 == dynamics)
+            .map(|g| format!("{} at μ_p = {}", g.2.len(), g.1))
+            .collect();
+        let _ = writeln!(
+            s,
+            "## Shear dynamics: {dynamics}\n\nPoints: {}. Fit ranges: φ > 0.5, I < 0.25, \
+             p* < 0.03 (φ); φ > 0.5, 0.005 < I < 0.5, p* < 0.1 (μ).\n",
+            counts.join(", ")
+        );
+        let label = format!("this work ({dynamics})");
+        let collect = |pick: fn(&GroupFits) -> &Option<CoefficientFit>| -> Vec<CoefficientFit> {
+            fits.iter().filter_map(|(_, f)| pick(f).clone()).collect()
+        };
+        let phi = collect(|f| &f.phi);
+        s += &coefficient_table(
+            "Volume fraction, Eq. 13 (Table 3)",
+            &label,
+            &phi,
+            paper_table3,
+        );
+        s += "\n";
+        s += &coefficient_table(
+            "Cohesion factor g_c, Eq. 15 (Table 5)",
+            &label,
+            &collect(|f| &f.gc),
+            paper_table5,
+        );
+        s += "\n";
+        s += &coefficient_table(
+            "Macroscopic friction, Eq. 1A at Bo = 0 (Table 7)",
+            &label,
+            &collect(|f| &f.mu),
+            paper_table7,
+        );
+        s += "\n";
+        s += &coefficient_table(
+            "Cohesion factor of μ, f_Bo = 1 + α₁ Bo^β₁ (Table 7)",
+            &label,
+            &collect(|f| &f.mu_cohesion),
+            paper_table7_cohesion,
+        );
+        s += "\n";
+        if phi.len() >= 3 {
+            s += &table8(&phi, &label);
+            s += "\n";
+        }
+        let notes: Vec<&String> = fits.iter().flat_map(|(_, f)| &f.notes).collect();
+        if !notes.is_empty() {
+            let _ = writeln!(s, "Not fitted:");
+            for n in notes {
+                let _ = writeln!(s, "- {n}");
+            }
+            s += "\n";
+        }
+    }
+    s
+}
+
+/// Eq. 1B fitted to `φ_0, I_φ, p*_φ` across the groups, beside the paper's Table 8.
+fn table8(phi: &[CoefficientFit], label: &str) -> String {
+    let mut s = String::from(
+        "Friction dependence, Eq. 1B (Table 8)\n\n| coefficient | source | Q_∞ | Q_0 | μ_p⁰ | RMS residual |\n|---|---|---|---|---|---|\n",
+    );
+    let mu_p: Vec<f64> = phi.iter().map(|f| f.mu_p).collect();
+    for (k, paper) in friction_dependences().iter().take(3).enumerate() {
+        let q: Vec<f64> = phi.iter().map(|f| f.fit.params[k]).collect();
+        let e: Vec<f64> = phi.iter().map(|f| f.fit.errors[k]).collect();
+        match fit_friction_dependence(&mu_p, &q, &e) {
+            Ok(f) => {
+                let _ = writeln!(
+                    s,
+                    "| {} | {label} | {:.4} ± {:.4} | {:.4} ± {:.4} | {:.4} ± {:.4} | {:.2e} |",
+                    paper.coefficient,
+                    f.params[0],
+                    f.errors[0],
+                    f.params[1],
+                    f.errors[1],
+                    f.params[2],
+                    f.errors[2],
+                    f.rms
+                );
+            }
+            Err(e) => {
+                let _ = writeln!(
+                    s,
+                    "| {} | {label} | not fitted: {e} | | | |",
+                    paper.coefficient
+                );
+            }
+        }
+        let _ = writeln!(
+            s,
+            "| {} | Shi et al. 2020 | {} | {} | {} | {} |",
+            paper.coefficient, paper.q_inf, paper.q_0, paper.mu_p0, paper.rms
+        );
+    }
+    s
+}
