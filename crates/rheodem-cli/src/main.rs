@@ -74,6 +74,10 @@ enum Command {
         /// Less output.
         #[arg(long, short)]
         quiet: bool,
+        /// Also store every finished point in this results database (SQLite, created if
+        /// missing), under the sweep file's name.
+        #[arg(long)]
+        db: Option<PathBuf>,
     },
     /// Compare the finished points of a sweep directory with the laws fitted by Shi et al.
     /// 2020 (markdown table; docs/model.md §8–9).
@@ -94,6 +98,9 @@ enum Command {
         /// The sweep's output directory (or its results archive).
         dir: PathBuf,
     },
+    /// The results database (SQLite): import a sweep's points, export CSV, count.
+    #[command(subcommand)]
+    Db(shear::DbCommand),
     /// Contact-law tools: force–overlap curves, equivalent linear model.
     #[command(subcommand)]
     Contact(contact::ContactCommand),
@@ -293,7 +300,13 @@ fn run(cli: Cli) -> Result<()> {
         Command::Predict(args) => predict::run(&args),
         Command::Fit { dir } => shear::fit(&dir),
         Command::ShearBox(args) => shear::shear_box(args),
-        Command::Sweep { file, jobs, quiet } => shear::sweep(&file, jobs, quiet),
+        Command::Sweep {
+            file,
+            jobs,
+            quiet,
+            db,
+        } => shear::sweep(&file, jobs, quiet, db.as_deref()),
+        Command::Db(cmd) => shear::db(cmd),
         Command::Compare { dir, figures } => shear::compare(&dir, figures.as_deref()),
         Command::Check { scenario } => {
             let sc = Scenario::from_file(&scenario)?;

@@ -6,6 +6,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 use rheodem::domain::ShearDynamics;
 use rheodem::io::atomic::write_atomic;
 use rheodem::run::RunError;
+use rheodem::setups::results_db::ResultsDb;
 use rheodem::setups::shear_box::ShearBoxSpec;
 use rheodem::setups::sweep::{
     POINT_FILE, PointResult, SweepSpec, archived, default_out, expand, results_csv, run_point,
@@ -222,7 +223,7 @@ fn report(r: &PointResult, dir: &Path) {
 }
 
 /// Runs `sweep`: `jobs` points at once, one thread each.
-pub fn sweep(path: &Path, jobs: Option<usize>, quiet: bool) -> Result<()> {
+pub fn sweep(path: &Path, jobs: Option<usize>, quiet: bool, db: Option<&Path>) -> Result<()> {
     let text =
         std::fs::read_to_string(path).with_context(|| format!("cannot read {}", path.display()))?;
     let spec: SweepSpec =
@@ -247,6 +248,11 @@ pub fn sweep(path: &Path, jobs: Option<usize>, quiet: bool) -> Result<()> {
         jobs,
         out.display()
     );
+    // Every finished point also goes into the results database, under the sweep's name.
+    let study = path
+        .file_stem()
+        .map_or("sweep".into(), |s| s.to_string_lossy().into_owned());
+    let database = db.map(ResultsDb::open).transpose()?.map(Mutex::new);
     let next = AtomicUsize::new(0);
     let results: Mutex<Vec<Option<PointResult>>> = Mutex::new(vec![None; points.len()]);
     let errors: Mutex<Vec<String>> = Mutex::new(Vec::new());
@@ -296,12 +302,19 @@ pub fn sweep(path: &Path, jobs: Option<usize>, quiet: bool) -> Result<()> {
                                 (Some(a), true) => archive_point(a, name, &r),
                                 _ => Ok(()),
                             };
+                            let stored = match &database {
+                                Some(d) => d
+                                    .lock()
+                                    .map_err(|_| anyhow::anyhow!("database lock poisoned"))
+                                    .and_then(|mut d| Ok(d.insert(&study, &r)?)),
+                                None => Ok(()),
+                            };
                             all[k] = Some(r);
                             let done: Vec<PointResult> = all.iter().flatten().cloned().collect();
                             let written = write_atomic(&table, results_csv(&done).as_bytes())
                                 .with_context(|| format!("cannot write {}", table.display()));
                             drop(all);
-                            if let Err(e) = archived.and(written) {
+                            if let Err(e) = archived.and(written).and(stored) {
                                 errors
                                     .lock()
                                     .map(|mut v| v.push(format!("{name}: {e:#}")))
@@ -500,6 +513,97 @@ pub fn fit(dir: &Path) -> Result<()> {
     print!("{}", rheodem::setups::law_fits::fit_tables(&finished));
     if !running.is_empty() {
         println!("\nNot finished (left out):\n{}", running.join("\n"));
+    }
+    Ok(())
+}
+
+/// The `db` subcommands: the results database (docs/studies.md).
+#[derive(clap::Subcommand)]
+pub enum DbCommand {
+    /// Store the finished points of a sweep directory or results archive.
+    Import {
+        /// The sweep's output directory or its results archive.
+        dir: PathBuf,
+        /// The database file (created if missing).
+        #[arg(long)]
+        db: PathBuf,
+        /// Study name to file the points under (default: the directory's name).
+        #[arg(long)]
+        study: Option<String>,
+    },
+    /// Write the points (of one study, or all) as CSV.
+    Export {
+        /// The database file.
+        #[arg(long)]
+        db: PathBuf,
+        /// Only this study.
+        #[arg(long)]
+        study: Option<String>,
+        /// Output file (default: standard output).
+        #[arg(long, short)]
+        out: Option<PathBuf>,
+    },
+    /// Count the points per study.
+    Status {
+        /// The database file.
+        #[arg(long)]
+        db: PathBuf,
+    },
+}
+
+/// Runs a `db` subcommand.
+pub fn db(cmd: DbCommand) -> Result<()> {
+    match cmd {
+        DbCommand::Import { dir, db, study } => {
+            let (finished, running) = load_results(&dir)?;
+            let study = study.unwrap_or_else(|| {
+                dir.file_name()
+                    .map_or("imported".into(), |s| s.to_string_lossy().into_owned())
+            });
+            let mut database = ResultsDb::open(&db)?;
+            for r in &finished {
+                database.insert(&study, r)?;
+            }
+            println!(
+                "{} points stored under study {study:?} in {} ({} in that study; {} not \
+                 finished, left out)",
+                finished.len(),
+                db.display(),
+                database.count(Some(&study))?,
+                running.len()
+            );
+        }
+        DbCommand::Export { db, study, out } => {
+            if !db.exists() {
+                bail!("{} does not exist", db.display());
+            }
+            let csv = ResultsDb::open(&db)?.export_csv(study.as_deref())?;
+            match out {
+                Some(f) => write_atomic(&f, csv.as_bytes())
+                    .with_context(|| format!("cannot write {}", f.display()))?,
+                None => print!("{csv}"),
+            }
+        }
+        DbCommand::Status { db } => {
+            if !db.exists() {
+                bail!("{} does not exist", db.display());
+            }
+            let database = ResultsDb::open(&db)?;
+            let mut studies: Vec<String> = database
+                .results(None)?
+                .into_iter()
+                .map(|(s, _)| s)
+                .collect();
+            studies.dedup();
+            for s in &studies {
+                println!("{s}: {} points", database.count(Some(s))?);
+            }
+            println!(
+                "total: {} points in {}",
+                database.count(None)?,
+                db.display()
+            );
+        }
     }
     Ok(())
 }

@@ -303,3 +303,44 @@ fn fit_tabulates_the_archive_against_the_paper() {
     assert!(!out.status.success());
     assert!(String::from_utf8_lossy(&out.stderr).contains("no sweep results"));
 }
+
+/// Four processes import the validation archive into one database at the same moment,
+/// under four study names: every point of every study is there, and the CSV export lists
+/// them.
+#[test]
+fn concurrent_processes_write_the_database_without_loss() {
+    let dir = temp("db");
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    let db = dir.join("results.sqlite");
+    let db_arg = db.to_string_lossy().into_owned();
+    let archive = std::fs::read_dir(workspace().join("validation/results"))
+        .expect("archive")
+        .filter(|e| {
+            e.as_ref()
+                .is_ok_and(|e| e.path().extension().is_some_and(|x| x == "json"))
+        })
+        .count();
+    let children: Vec<_> = (0..4)
+        .map(|k| {
+            Command::new(env!("CARGO_BIN_EXE_rheodem"))
+                .args(["db", "import", "validation/results", "--db", &db_arg])
+                .args(["--study", &format!("s{k}")])
+                .current_dir(workspace())
+                .spawn()
+                .expect("spawns")
+        })
+        .collect();
+    for mut c in children {
+        assert!(c.wait().expect("waits").success());
+    }
+    let out = rheodem(&["db", "status", "--db", &db_arg]);
+    let text = String::from_utf8_lossy(&out.stdout);
+    for k in 0..4 {
+        assert!(text.contains(&format!("s{k}: {archive} points")), "{text}");
+    }
+    let out = rheodem(&["db", "export", "--db", &db_arg, "--study", "s2"]);
+    let csv = String::from_utf8_lossy(&out.stdout);
+    assert_eq!(csv.lines().count(), archive + 1, "{csv}");
+    assert!(csv.lines().skip(1).all(|l| l.starts_with("s2,")));
+    let _ = std::fs::remove_dir_all(&dir);
+}
