@@ -66,6 +66,9 @@ pub fn line_plot_svg(labels: &Labels<'_>, series: &[Series<'_>]) -> Result<Strin
     plot_svg(labels, series, &[])
 }
 
+/// Size of a rendered line plot (pixels).
+const PLOT_SIZE: (u32, u32) = (800, 560);
+
 /// Renders curves and measured points with error bars as an SVG document, 800×560 pixels.
 /// Curve `k` and marker set `k` share a colour; marker sets beyond the curves get colours
 /// of their own.
@@ -74,7 +77,52 @@ pub fn plot_svg(
     series: &[Series<'_>],
     markers: &[Markers<'_>],
 ) -> Result<String, String> {
+    let mut svg = String::new();
+    {
+        let root = SVGBackend::with_string(&mut svg, PLOT_SIZE).into_drawing_area();
+        draw_plot(&root, labels, series, markers)?;
+    }
+    Ok(svg)
+}
+
+/// [`plot_svg`] rendered as a PNG image (8-bit RGB).
+///
+/// # Errors
+/// As [`plot_svg`], and a message when encoding fails.
+pub fn plot_png(
+    labels: &Labels<'_>,
+    series: &[Series<'_>],
+    markers: &[Markers<'_>],
+) -> Result<Vec<u8>, String> {
+    let mut rgb = vec![0u8; (PLOT_SIZE.0 * PLOT_SIZE.1 * 3) as usize];
+    {
+        let root = BitMapBackend::with_buffer(&mut rgb, PLOT_SIZE).into_drawing_area();
+        draw_plot(&root, labels, series, markers)?;
+    }
+    encode_png(&rgb, PLOT_SIZE)
+}
+
+/// Encodes an 8-bit RGB buffer of `size` pixels as PNG.
+fn encode_png(rgb: &[u8], size: (u32, u32)) -> Result<Vec<u8>, String> {
+    let mut png = Vec::new();
+    let mut encoder = png::Encoder::new(&mut png, size.0, size.1);
+    encoder.set_color(png::ColorType::Rgb);
+    encoder.set_depth(png::BitDepth::Eight);
+    let mut writer = encoder.write_header().map_err(|e| e.to_string())?;
+    writer.write_image_data(rgb).map_err(|e| e.to_string())?;
+    writer.finish().map_err(|e| e.to_string())?;
+    Ok(png)
+}
+
+/// Draws the plot of [`plot_svg`] on any backend.
+fn draw_plot<DB: DrawingBackend>(
+    root: &DrawingArea<DB, plotters::coord::Shift>,
+    labels: &Labels<'_>,
+    series: &[Series<'_>],
+    markers: &[Markers<'_>],
+) -> Result<(), String> {
     register_font();
+    let err = |e: DrawingAreaErrorKind<DB::ErrorType>| e.to_string();
     let curve_points = series.iter().flat_map(|s| s.points.iter().copied());
     let marker_points = markers.iter().flat_map(|m| {
         m.points
@@ -111,63 +159,59 @@ pub fn plot_svg(
     // Headroom above the data for the legend (upper right), so that it hides nothing.
     let entries = (series.len() + markers.len()) as f64;
     let y1 = y1 + (y1 - y0) * (0.08 * entries).min(0.6);
-    let mut svg = String::new();
-    {
-        let root = SVGBackend::with_string(&mut svg, (800, 560)).into_drawing_area();
-        root.fill(&WHITE).map_err(|e| e.to_string())?;
-        let mut chart = ChartBuilder::on(&root)
-            .caption(labels.title, ("sans-serif", 20))
-            .margin(15)
-            .x_label_area_size(45)
-            .y_label_area_size(80)
-            .build_cartesian_2d(x0..x1, y0..y1)
-            .map_err(|e| e.to_string())?;
+    root.fill(&WHITE).map_err(err)?;
+    let mut chart = ChartBuilder::on(root)
+        .caption(labels.title, ("sans-serif", 20))
+        .margin(15)
+        .x_label_area_size(45)
+        .y_label_area_size(80)
+        .build_cartesian_2d(x0..x1, y0..y1)
+        .map_err(err)?;
+    chart
+        .configure_mesh()
+        .x_desc(labels.x)
+        .y_desc(labels.y)
+        .label_style(("sans-serif", 13))
+        .draw()
+        .map_err(err)?;
+    for (k, s) in series.iter().enumerate() {
+        let color = colour(k);
         chart
-            .configure_mesh()
-            .x_desc(labels.x)
-            .y_desc(labels.y)
-            .label_style(("sans-serif", 13))
-            .draw()
-            .map_err(|e| e.to_string())?;
-        for (k, s) in series.iter().enumerate() {
-            let color = colour(k);
-            chart
-                .draw_series(LineSeries::new(
-                    s.points.iter().copied(),
-                    color.stroke_width(2),
-                ))
-                .map_err(|e| e.to_string())?
-                .label(s.label)
-                .legend(move |(x, y)| {
-                    PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2))
-                });
-        }
-        for (k, m) in markers.iter().enumerate() {
-            let color = colour(k);
-            chart
-                .draw_series(m.points.iter().map(|&(x, y, e)| {
-                    ErrorBar::new_vertical(x, y - e.abs(), y, y + e.abs(), color.stroke_width(2), 8)
-                }))
-                .map_err(|e| e.to_string())?;
-            chart
-                .draw_series(
-                    m.points
-                        .iter()
-                        .map(|&(x, y, _)| Circle::new((x, y), 4, color.filled())),
-                )
-                .map_err(|e| e.to_string())?
-                .label(m.label)
-                .legend(move |(x, y)| Circle::new((x + 10, y), 4, color.filled()));
-        }
-        chart
-            .configure_series_labels()
-            .position(SeriesLabelPosition::UpperRight)
-            .background_style(WHITE.mix(0.8))
-            .border_style(BLACK)
-            .label_font(("sans-serif", 13))
-            .draw()
-            .map_err(|e| e.to_string())?;
-        root.present().map_err(|e| e.to_string())?;
+            .draw_series(LineSeries::new(
+                s.points.iter().copied(),
+                color.stroke_width(2),
+            ))
+            .map_err(err)?
+            .label(s.label)
+            .legend(move |(x, y)| {
+                PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2))
+            });
     }
-    Ok(svg)
+    for (k, m) in markers.iter().enumerate() {
+        let color = colour(k);
+        chart
+            .draw_series(m.points.iter().map(|&(x, y, e)| {
+                ErrorBar::new_vertical(x, y - e.abs(), y, y + e.abs(), color.stroke_width(2), 8)
+            }))
+            .map_err(err)?;
+        chart
+            .draw_series(
+                m.points
+                    .iter()
+                    .map(|&(x, y, _)| Circle::new((x, y), 4, color.filled())),
+            )
+            .map_err(err)?
+            .label(m.label)
+            .legend(move |(x, y)| Circle::new((x + 10, y), 4, color.filled()));
+    }
+    chart
+        .configure_series_labels()
+        .position(SeriesLabelPosition::UpperRight)
+        .background_style(WHITE.mix(0.8))
+        .border_style(BLACK)
+        .label_font(("sans-serif", 13))
+        .draw()
+        .map_err(err)?;
+    root.present().map_err(err)?;
+    Ok(())
 }

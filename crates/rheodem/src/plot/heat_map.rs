@@ -22,7 +22,8 @@ pub struct HeatMap<'a> {
     /// The field, `values[ix + xs.len() * iy]`; non-finite values are left blank.
     pub values: &'a [f64],
     /// Curves drawn over the map, the first in black and the rest in the line plots'
-    /// colours, with the legend in the upper left.
+    /// colours, with the legend in the upper left; a non-finite point breaks a curve into
+    /// pieces (for contours of several branches).
     pub overlays: &'a [Series<'a>],
 }
 
@@ -98,14 +99,7 @@ impl HeatMap<'_> {
             let root = BitMapBackend::with_buffer(&mut rgb, SIZE).into_drawing_area();
             self.draw(&root, range)?;
         }
-        let mut png = Vec::new();
-        let mut encoder = png::Encoder::new(&mut png, SIZE.0, SIZE.1);
-        encoder.set_color(png::ColorType::Rgb);
-        encoder.set_depth(png::BitDepth::Eight);
-        let mut writer = encoder.write_header().map_err(|e| e.to_string())?;
-        writer.write_image_data(&rgb).map_err(|e| e.to_string())?;
-        writer.finish().map_err(|e| e.to_string())?;
-        Ok(png)
+        super::encode_png(&rgb, SIZE)
     }
 
     fn draw<DB: DrawingBackend>(
@@ -157,19 +151,21 @@ impl HeatMap<'_> {
             } else {
                 curve_colour(k - 1)
             };
-            chart
-                .draw_series(LineSeries::new(
-                    s.points
-                        .iter()
-                        .copied()
-                        .filter(|p| p.0.is_finite() && p.1.is_finite()),
-                    line.stroke_width(2),
-                ))
-                .map_err(err)?
-                .label(s.label)
-                .legend(move |(x, y)| {
-                    PathElement::new(vec![(x, y), (x + 20, y)], line.stroke_width(2))
-                });
+            // A non-finite point breaks the curve; the legend names it once.
+            let pieces = s
+                .points
+                .split(|p| !(p.0.is_finite() && p.1.is_finite()))
+                .filter(|piece| piece.len() >= 2);
+            for (n, piece) in pieces.enumerate() {
+                let drawn = chart
+                    .draw_series(LineSeries::new(piece.iter().copied(), line.stroke_width(2)))
+                    .map_err(err)?;
+                if n == 0 {
+                    drawn.label(s.label).legend(move |(x, y)| {
+                        PathElement::new(vec![(x, y), (x + 20, y)], line.stroke_width(2))
+                    });
+                }
+            }
         }
         if !self.overlays.is_empty() {
             chart

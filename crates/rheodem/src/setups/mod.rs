@@ -2,6 +2,7 @@
 
 pub mod compare;
 pub mod law_fits;
+pub mod phase_diagram;
 pub mod results_db;
 pub mod shear_box;
 pub mod split_bottom;
