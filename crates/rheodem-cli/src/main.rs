@@ -98,6 +98,9 @@ enum Command {
         /// The sweep's output directory (or its results archive).
         dir: PathBuf,
     },
+    /// Studies: a sweep with a report and a quick variant (run, report, status).
+    #[command(subcommand)]
+    Study(shear::StudyCommand),
     /// The results database (SQLite): import a sweep's points, export CSV, count.
     #[command(subcommand)]
     Db(shear::DbCommand),
@@ -307,6 +310,7 @@ fn run(cli: Cli) -> Result<()> {
             db,
         } => shear::sweep(&file, jobs, quiet, db.as_deref()),
         Command::Db(cmd) => shear::db(cmd),
+        Command::Study(cmd) => shear::study(cmd),
         Command::Compare { dir, figures } => shear::compare(&dir, figures.as_deref()),
         Command::Check { scenario } => {
             let sc = Scenario::from_file(&scenario)?;

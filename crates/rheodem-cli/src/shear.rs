@@ -228,15 +228,35 @@ pub fn sweep(path: &Path, jobs: Option<usize>, quiet: bool, db: Option<&Path>) -
         std::fs::read_to_string(path).with_context(|| format!("cannot read {}", path.display()))?;
     let spec: SweepSpec =
         toml::from_str(&text).map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
-    let points = expand(&spec)?;
-    // Paths in the file are relative to the file, so that the sweep finds its points
-    // wherever it is started from.
+    let study = path
+        .file_stem()
+        .map_or("sweep".into(), |s| s.to_string_lossy().into_owned());
+    run_sweep(&spec, path, &study, jobs, quiet, db)
+}
+
+/// Where a sweep (read from `path`) writes its points, and its archive: paths in the file
+/// are relative to the file, so that the sweep finds its points wherever it is started from.
+fn sweep_dirs(spec: &SweepSpec, path: &Path) -> (PathBuf, Option<PathBuf>) {
     let here = path.parent().unwrap_or(Path::new(""));
     let out = spec
         .out
         .as_ref()
         .map_or_else(|| default_out(path), |o| here.join(o));
-    let archive = spec.results.as_ref().map(|r| here.join(r));
+    (out, spec.results.as_ref().map(|r| here.join(r)))
+}
+
+/// Runs the points of `spec` (read from `path`) that are not finished, storing each
+/// finished point in the database `db` (if any) under `study`.
+fn run_sweep(
+    spec: &SweepSpec,
+    path: &Path,
+    study: &str,
+    jobs: Option<usize>,
+    quiet: bool,
+    db: Option<&Path>,
+) -> Result<()> {
+    let points = expand(spec)?;
+    let (out, archive) = sweep_dirs(spec, path);
     let jobs = crate::worker_count(
         "--jobs",
         jobs.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get())),
@@ -248,10 +268,7 @@ pub fn sweep(path: &Path, jobs: Option<usize>, quiet: bool, db: Option<&Path>) -
         jobs,
         out.display()
     );
-    // Every finished point also goes into the results database, under the sweep's name.
-    let study = path
-        .file_stem()
-        .map_or("sweep".into(), |s| s.to_string_lossy().into_owned());
+    // Every finished point also goes into the results database, under the study's name.
     let database = db.map(ResultsDb::open).transpose()?.map(Mutex::new);
     let next = AtomicUsize::new(0);
     let results: Mutex<Vec<Option<PointResult>>> = Mutex::new(vec![None; points.len()]);
@@ -306,7 +323,7 @@ pub fn sweep(path: &Path, jobs: Option<usize>, quiet: bool, db: Option<&Path>) -
                                 Some(d) => d
                                     .lock()
                                     .map_err(|_| anyhow::anyhow!("database lock poisoned"))
-                                    .and_then(|mut d| Ok(d.insert(&study, &r)?)),
+                                    .and_then(|mut d| Ok(d.insert(study, &r)?)),
                                 None => Ok(()),
                             };
                             all[k] = Some(r);
@@ -619,4 +636,134 @@ pub fn db(cmd: DbCommand) -> Result<()> {
         }
     }
     Ok(())
+}
+
+/// The `study` subcommands (docs/studies.md).
+#[derive(clap::Subcommand)]
+pub enum StudyCommand {
+    /// Run the study's missing points (finished ones are never rerun; a killed study
+    /// resumes where it stopped).
+    Run {
+        /// The study file (TOML).
+        file: PathBuf,
+        /// Run the quick variant (fewer points, smaller systems).
+        #[arg(long)]
+        quick: bool,
+        /// Points run at once (one thread each; default: all logical CPUs).
+        #[arg(long, short)]
+        jobs: Option<usize>,
+        /// Less output.
+        #[arg(long, short)]
+        quiet: bool,
+    },
+    /// Write the study's report (Markdown, and HTML with the figures embedded) from its
+    /// finished points, into `<out>/report/`.
+    Report {
+        /// The study file (TOML).
+        file: PathBuf,
+        /// The quick variant.
+        #[arg(long)]
+        quick: bool,
+    },
+    /// How many of the study's points have finished.
+    Status {
+        /// The study file (TOML).
+        file: PathBuf,
+        /// The quick variant.
+        #[arg(long)]
+        quick: bool,
+    },
+}
+
+/// The study in `file`, its sweep for the variant, and the variant's name.
+fn study_sweep(
+    file: &Path,
+    quick: bool,
+) -> Result<(rheodem::setups::study::StudySpec, SweepSpec, String)> {
+    let text =
+        std::fs::read_to_string(file).with_context(|| format!("cannot read {}", file.display()))?;
+    let study = rheodem::setups::study::StudySpec::from_toml(&text)
+        .map_err(|e| anyhow::anyhow!("{}: {e}", file.display()))?;
+    let sweep = study
+        .sweep(quick)
+        .map_err(|e| anyhow::anyhow!("{}: {e}", file.display()))?;
+    let stem = file
+        .file_stem()
+        .map_or("study".into(), |s| s.to_string_lossy().into_owned());
+    Ok((
+        study,
+        sweep,
+        if quick { format!("{stem}-quick") } else { stem },
+    ))
+}
+
+/// The finished points of a sweep (from its archive or its point directories) and the
+/// number of its points.
+fn sweep_results(sweep: &SweepSpec, file: &Path) -> Result<(Vec<PointResult>, usize)> {
+    let points = expand(sweep)?;
+    let (out, archive) = sweep_dirs(sweep, file);
+    let mut finished = Vec::new();
+    for (name, spec) in &points {
+        if let Some(r) = archive.as_deref().and_then(|a| archived(a, name, spec)) {
+            finished.push(r);
+        } else if let Ok(text) = std::fs::read_to_string(out.join(name).join("steady_state.json")) {
+            let r: PointResult = serde_json::from_str(&text)
+                .with_context(|| format!("{}/{name}/steady_state.json", out.display()))?;
+            if r.spec == *spec {
+                finished.push(r);
+            }
+        }
+    }
+    Ok((finished, points.len()))
+}
+
+/// Runs a `study` subcommand.
+pub fn study(cmd: StudyCommand) -> Result<()> {
+    match cmd {
+        StudyCommand::Run {
+            file,
+            quick,
+            jobs,
+            quiet,
+        } => {
+            let (study, sweep, name) = study_sweep(&file, quick)?;
+            let here = file.parent().unwrap_or(Path::new(""));
+            let db = study.database.as_ref().map(|d| here.join(d));
+            run_sweep(&sweep, &file, &name, jobs, quiet, db.as_deref())
+        }
+        StudyCommand::Report { file, quick } => {
+            let (study, sweep, name) = study_sweep(&file, quick)?;
+            let (finished, total) = sweep_results(&sweep, &file)?;
+            let variant = if quick { "quick" } else { "full" };
+            let report = rheodem::setups::study::report(&study, variant, total, &finished)
+                .map_err(|e| anyhow::anyhow!("cannot build the report of {name}: {e}"))?;
+            let (out, _) = sweep_dirs(&sweep, &file);
+            let dir = out.join("report");
+            std::fs::create_dir_all(&dir)
+                .with_context(|| format!("cannot create {}", dir.display()))?;
+            let write = |file: PathBuf, bytes: &[u8]| {
+                write_atomic(&file, bytes)
+                    .with_context(|| format!("cannot write {}", file.display()))
+            };
+            for f in &report.figures {
+                write(dir.join(format!("{}.png", f.name)), &f.png)?;
+                write(dir.join(format!("{}.svg", f.name)), f.svg.as_bytes())?;
+            }
+            write(dir.join("report.md"), report.markdown.as_bytes())?;
+            let html = rheodem::setups::study::report_html(&report, &study.title);
+            write(dir.join("index.html"), html.as_bytes())?;
+            println!(
+                "report of {name} ({} of {total} points finished) in {}",
+                finished.len(),
+                dir.display()
+            );
+            Ok(())
+        }
+        StudyCommand::Status { file, quick } => {
+            let (_, sweep, name) = study_sweep(&file, quick)?;
+            let (finished, total) = sweep_results(&sweep, &file)?;
+            println!("{name}: {} of {total} points finished", finished.len());
+            Ok(())
+        }
+    }
 }

@@ -344,3 +344,85 @@ fn concurrent_processes_write_the_database_without_loss() {
     assert!(csv.lines().skip(1).all(|l| l.starts_with("s2,")));
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// A tiny study end to end: `study run` runs its two points, a second `run` finds them
+/// finished and runs nothing, `study status` counts them, and `study report` writes the
+/// Markdown and the self-contained HTML with the validation table and the figures.
+#[test]
+fn a_tiny_study_runs_resumes_and_reports() {
+    let dir = temp("study");
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    let file = dir.join("tiny.toml");
+    std::fs::write(
+        &file,
+        "title = \"tiny study\"\nout = \"runs/tiny\"\ndatabase = \"results.sqlite\"\n\
+         [base]\nmu_p = 0.01\nsoftness = 0.01\nparticles = 512\nstrain = 2.0\n\
+         transient_strain = 1.0\n[grid]\ninertial = [0.1, 0.2]\n",
+    )
+    .expect("study file");
+    let f = file.to_string_lossy().into_owned();
+    let out = rheodem(&["study", "run", &f, "--jobs", "2", "--quiet"]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let point = dir.join("runs/tiny/mu0.01_i0.1_p0.01_bo0_none_w3_n512_s1/steady_state.json");
+    let first = std::fs::metadata(&point)
+        .and_then(|m| m.modified())
+        .expect("finished");
+    let out = rheodem(&["study", "run", &f, "--quiet"]);
+    assert!(out.status.success());
+    let again = std::fs::metadata(&point)
+        .and_then(|m| m.modified())
+        .expect("still there");
+    assert_eq!(first, again, "a finished point was run again");
+    let out = rheodem(&["study", "status", &f]);
+    assert!(String::from_utf8_lossy(&out.stdout).contains("2 of 2 points finished"));
+    let out = rheodem(&["study", "report", &f]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let report = dir.join("runs/tiny/report");
+    let md = std::fs::read_to_string(report.join("report.md")).expect("markdown");
+    assert!(
+        md.starts_with("# tiny study") && md.contains("| 0.01 | 0.2 | 0.01 | 0 |"),
+        "{md}"
+    );
+    let html = std::fs::read_to_string(report.join("index.html")).expect("html");
+    assert!(html.contains("<table>") && html.contains("data:image/png;base64,"));
+    let db = dir.join("results.sqlite").to_string_lossy().into_owned();
+    let out = rheodem(&["db", "status", "--db", &db]);
+    assert!(String::from_utf8_lossy(&out.stdout).contains("tiny: 2 points"));
+    let out = rheodem(&["study", "run", &f, "--quick"]);
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("no [quick] variant"));
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Every shipped study reads, and has a quick variant of at most 10 points.
+#[test]
+fn shipped_studies_are_valid_and_have_quick_variants() {
+    let mut n = 0;
+    for entry in std::fs::read_dir(workspace().join("studies")).expect("studies/") {
+        let path = entry.expect("entry").path();
+        if path.extension().is_none_or(|e| e != "toml") {
+            continue;
+        }
+        let text = std::fs::read_to_string(&path).expect("readable");
+        let study = rheodem::setups::study::StudySpec::from_toml(&text)
+            .unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+        let quick = rheodem::setups::sweep::expand(&study.sweep(true).expect("quick variant"))
+            .expect("points");
+        assert!(
+            quick.len() <= 10,
+            "{}: {} quick points",
+            path.display(),
+            quick.len()
+        );
+        n += 1;
+    }
+    assert!(n >= 2, "{n} studies shipped");
+}

@@ -7,4 +7,5 @@ pub mod results_db;
 pub mod shear_box;
 pub mod split_bottom;
 pub mod split_bottom_fields;
+pub mod study;
 pub mod sweep;
