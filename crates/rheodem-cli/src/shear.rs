@@ -510,18 +510,12 @@ pub fn compare(dir: &Path, figures: Option<&Path>) -> Result<()> {
         std::fs::create_dir_all(out).with_context(|| format!("cannot create {}", out.display()))?;
         let svgs = rheodem::setups::compare::comparison_figures(&finished)
             .map_err(|e| anyhow::anyhow!("cannot draw the figures: {e}"))?;
-        for (name, svg) in svgs {
-            let file = out.join(name);
-            write_atomic(&file, svg.as_bytes())
-                .with_context(|| format!("cannot write {}", file.display()))?;
-            eprintln!("wrote {}", file.display());
-        }
-        // The Δφ figures at the phase diagram's state (I, p*) = (0.02, 0.01).
+        // And the Δφ figures at the phase diagram's state (I, p*) = (0.02, 0.01).
         use rheodem::setups::phase_diagram::{delta_phi_figures, delta_phi_points};
         let points = delta_phi_points(&finished, 0.02, 0.01);
         let figures = delta_phi_figures(&points, 0.02, 0.01)
             .map_err(|e| anyhow::anyhow!("cannot draw the Δφ figures: {e}"))?;
-        for fig in figures {
+        for fig in svgs.into_iter().chain(figures) {
             for (ext, bytes) in [("svg", fig.svg.as_bytes()), ("png", fig.png.as_slice())] {
                 let file = out.join(format!("{}.{ext}", fig.name));
                 write_atomic(&file, bytes)

@@ -129,12 +129,17 @@ fn figures_show_the_points_that_belong_to_them() {
     // against I only.
     let figures = rheodem::setups::compare::comparison_figures(std::slice::from_ref(finished()))
         .expect("figures");
-    let names: Vec<&str> = figures.iter().map(|(n, _)| *n).collect();
-    assert_eq!(names, ["phi_vs_inertial.svg", "mu_vs_inertial.svg"]);
-    for (name, svg) in &figures {
-        assert!(svg.starts_with("<svg"), "{name}");
-        assert!(svg.contains("Shi et al. 2020"), "{name}: the law is drawn");
-        assert!(svg.contains("<circle"), "{name}: the point is drawn");
+    let names: Vec<&str> = figures.iter().map(|f| f.name.as_str()).collect();
+    assert_eq!(names, ["phi_vs_inertial", "mu_vs_inertial"]);
+    for f in &figures {
+        let name = &f.name;
+        assert!(f.svg.starts_with("<svg"), "{name}");
+        assert!(
+            f.svg.contains("Shi et al. 2020"),
+            "{name}: the law is drawn"
+        );
+        assert!(f.svg.contains("<circle"), "{name}: the point is drawn");
+        assert!(f.png.starts_with(b"\x89PNG"), "{name}: a PNG too");
     }
     // No finished point, no figure.
     assert!(

@@ -13,9 +13,10 @@
 //! the reasons when one fails or the averaging window still drifts, `unchecked` when no
 //! check applied (no fitted law for the point's `μ_p`).
 
+use super::phase_diagram::Figure;
 use super::sweep::PointResult;
 use crate::domain::ShearDynamics;
-use crate::plot::{Labels, Markers, Series, plot_svg};
+use crate::plot::{Labels, Markers, Series, plot_png, plot_svg};
 use crate::rheology::{MuLaw, PhiLaw};
 use std::fmt::Write;
 
@@ -182,7 +183,8 @@ const FIGURE_GROUPS: [(f64, ShearDynamics, &str); 4] = [
 ];
 
 /// One validation figure: which points, which axes, which law.
-struct Figure {
+struct FigureSpec {
+    /// File stem.
     file: &'static str,
     title: &'static str,
     x_label: &'static str,
@@ -213,9 +215,9 @@ fn mu_of(r: &PointResult) -> Option<(f64, f64)> {
     Some((e.mean, e.error))
 }
 
-const FIGURES: [Figure; 5] = [
-    Figure {
-        file: "phi_vs_bond.svg",
+const FIGURES: [FigureSpec; 5] = [
+    FigureSpec {
+        file: "phi_vs_bond",
         title: "φ against Bo (reversible adhesion), I = 0.02, p* = 0.01",
         x_label: "Bond number Bo",
         y_label: "volume fraction φ",
@@ -225,8 +227,8 @@ const FIGURES: [Figure; 5] = [
         law: |mu_p, bo| PhiLaw::for_mu_p(mu_p).map(|l| l.phi(0.02, 0.01, bo)),
         range: (0.0, 4.0),
     },
-    Figure {
-        file: "phi_vs_inertial.svg",
+    FigureSpec {
+        file: "phi_vs_inertial",
         title: "φ against I, p* = 0.01, Bo = 0",
         x_label: "inertial number I",
         y_label: "volume fraction φ",
@@ -236,8 +238,8 @@ const FIGURES: [Figure; 5] = [
         law: |mu_p, i| PhiLaw::for_mu_p(mu_p).map(|l| l.phi(i, 0.01, 0.0)),
         range: (0.004, 0.11),
     },
-    Figure {
-        file: "mu_vs_inertial.svg",
+    FigureSpec {
+        file: "mu_vs_inertial",
         title: "μ against I, p* = 0.01, Bo = 0",
         x_label: "inertial number I",
         y_label: "macroscopic friction μ",
@@ -247,8 +249,8 @@ const FIGURES: [Figure; 5] = [
         law: |mu_p, i| MuLaw::for_mu_p(mu_p).map(|l| l.mu(i, 0.01, 0.0)),
         range: (0.004, 0.11),
     },
-    Figure {
-        file: "phi_vs_softness.svg",
+    FigureSpec {
+        file: "phi_vs_softness",
         title: "φ against p*, I = 0.02, Bo = 0",
         x_label: "softness p*",
         y_label: "volume fraction φ",
@@ -258,8 +260,8 @@ const FIGURES: [Figure; 5] = [
         law: |mu_p, p| PhiLaw::for_mu_p(mu_p).map(|l| l.phi(0.02, p, 0.0)),
         range: (0.001, 0.022),
     },
-    Figure {
-        file: "mu_vs_softness.svg",
+    FigureSpec {
+        file: "mu_vs_softness",
         title: "μ against p*, I = 0.02, Bo = 0",
         x_label: "softness p*",
         y_label: "macroscopic friction μ",
@@ -271,13 +273,13 @@ const FIGURES: [Figure; 5] = [
     },
 ];
 
-/// The validation figures (file name, SVG document): measured steady states with their
+/// The validation figures (file stem, SVG and PNG): measured steady states with their
 /// standard errors against the laws of Shi et al. 2020, one colour per `μ_p` (and one for
 /// each other shear dynamics, docs/model.md §4.4–4.5; the laws are drawn for the lab
 /// frame's groups). Where several
 /// runs share a point, the longest is shown. Figures without any measured point are left
 /// out.
-pub fn comparison_figures(results: &[PointResult]) -> Result<Vec<(&'static str, String)>, String> {
+pub fn comparison_figures(results: &[PointResult]) -> Result<Vec<Figure>, String> {
     let mut out = Vec::new();
     for fig in &FIGURES {
         let mut markers: Vec<(&str, MeasuredPoints)> = Vec::new();
@@ -329,7 +331,11 @@ pub fn comparison_figures(results: &[PointResult]) -> Result<Vec<(&'static str, 
             x: fig.x_label,
             y: fig.y_label,
         };
-        out.push((fig.file, plot_svg(&labels, &series, &marks)?));
+        out.push(Figure {
+            name: fig.file.into(),
+            svg: plot_svg(&labels, &series, &marks)?,
+            png: plot_png(&labels, &series, &marks)?,
+        });
     }
     Ok(out)
 }

@@ -178,7 +178,8 @@ pub fn report(
     let _ = writeln!(md, "\n## Fitted coefficients\n");
     md += &fit_tables(finished);
     let (i, p) = (study.report.inertial, study.report.softness);
-    let figures = delta_phi_figures(&delta_phi_points(finished, i, p), i, p)?;
+    let mut figures = super::compare::comparison_figures(finished)?;
+    figures.extend(delta_phi_figures(&delta_phi_points(finished, i, p), i, p)?);
     let _ = writeln!(md, "\n## Figures\n");
     for f in &figures {
         let _ = writeln!(md, "![{0}]({0}.png)\n", f.name);
