@@ -215,7 +215,18 @@ fn mu_of(r: &PointResult) -> Option<(f64, f64)> {
     Some((e.mean, e.error))
 }
 
-const FIGURES: [FigureSpec; 5] = [
+const FIGURES: [FigureSpec; 6] = [
+    FigureSpec {
+        file: "mu_vs_bond",
+        title: "μ against Bo (reversible adhesion), I = 0.02, p* = 0.01",
+        x_label: "Bond number Bo",
+        y_label: "macroscopic friction μ",
+        selects: at_reference,
+        x: |r| r.spec.bond,
+        y: mu_of,
+        law: |mu_p, bo| MuLaw::for_mu_p(mu_p).map(|l| l.mu(0.02, 0.01, bo)),
+        range: (0.0, 4.0),
+    },
     FigureSpec {
         file: "phi_vs_bond",
         title: "φ against Bo (reversible adhesion), I = 0.02, p* = 0.01",
