@@ -1,17 +1,18 @@
 //! Every TOML example in the documentation parses and validates, so that none can drift
 //! from the file formats: the ```` ```toml ```` blocks of the doc comments of both crates'
-//! sources and of the Markdown files at the top of the repository.
+//! sources and of the Markdown files at the top of the repository and in `docs/`.
 //!
 //! A block is accepted as the first of these that takes it: a complete scenario
 //! (`Scenario::from_toml`, then `scenario::build` with the run cut to one step and any
 //! preparation sped up), a sweep file (`SweepSpec`, every point expanded and validated), a
-//! shear-box point (`ShearBoxSpec::derive`), or a scenario fragment (merged into a minimal
+//! study file (`StudySpec`, both variants expanded and validated), a shear-box point (`ShearBoxSpec::derive`), or a scenario fragment (merged into a minimal
 //! valid scenario, then parsed and built like a complete one). A block that is none of
 //! them fails the test with every reason.
 
 use rheodem::scenario::spec::PreparationSpec;
 use rheodem::scenario::{Scenario, build};
 use rheodem::setups::shear_box::ShearBoxSpec;
+use rheodem::setups::study::StudySpec;
 use rheodem::setups::sweep::{SweepSpec, expand};
 use std::path::{Path, PathBuf};
 
@@ -150,6 +151,10 @@ fn check_block(text: &str) -> Result<&'static str, String> {
         }
         Err(e) => why.push(format!("not a sweep: {e}")),
     }
+    match StudySpec::from_toml(text) {
+        Ok(_) => return Ok("study"),
+        Err(e) => why.push(format!("not a study: {e}")),
+    }
     match toml::from_str::<ShearBoxSpec>(text) {
         Ok(p) => {
             return p
@@ -178,8 +183,8 @@ fn check_block(text: &str) -> Result<&'static str, String> {
     Err(why.join("; "))
 }
 
-/// Every ```` ```toml ```` block of the doc comments in `crates/*/src` and of the top-level
-/// Markdown files is a valid scenario, sweep, shear-box point or scenario fragment (see
+/// Every ```` ```toml ```` block of the doc comments in `crates/*/src` and of the Markdown
+/// files at the top and in `docs/` is a valid scenario, sweep, study, shear-box point or scenario fragment (see
 /// the module comment). At least the two known blocks (the scenario format in
 /// `scenario/spec.rs`, the sweep format in `setups/sweep.rs`) must be found, so that a
 /// broken extraction cannot pass vacuously.
@@ -197,8 +202,9 @@ fn every_toml_example_in_the_docs_is_valid() {
             blocks.push((path.clone(), line, block));
         }
     }
-    let mut docs: Vec<PathBuf> = std::fs::read_dir(&root)
-        .expect("repository root")
+    let mut docs: Vec<PathBuf> = [root.clone(), root.join("docs")]
+        .iter()
+        .flat_map(|d| std::fs::read_dir(d).expect("repository root and docs/"))
         .map(|e| e.expect("entry").path())
         .filter(|p| p.extension().is_some_and(|e| e == "md"))
         .collect();

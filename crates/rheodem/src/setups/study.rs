@@ -12,6 +12,7 @@
 //! softness = 0.01
 //! [base]                                    # as in a sweep file
 //! mu_p = 0.01
+//! softness = 0.01
 //! [grid]
 //! inertial = [0.01, 0.02, 0.05]
 //! softness = [0.005, 0.01]
