@@ -130,7 +130,7 @@ impl<M: Fn(&[f64], usize) -> f64> LeastSquaresProblem<f64, Dyn, Dyn> for Problem
 /// ```
 /// use rheodem::fit::least_squares;
 /// // y = a exp(−b x) through three exact points: a = 2, b = 0.5.
-/// let x = [0.0, 1.0, 2.0, 3.0];
+/// let x = [0.0f64, 1.0, 2.0, 3.0];
 /// let y: Vec<f64> = x.iter().map(|x| 2.0 * (-0.5 * x).exp()).collect();
 /// let fit = least_squares(|p, i| p[0] * (-p[1] * x[i]).exp(), &y, &[0.01; 4], &[1.0, 1.0])?;
 /// assert!((fit.params[0] - 2.0).abs() < 1e-8 && (fit.params[1] - 0.5).abs() < 1e-8);
