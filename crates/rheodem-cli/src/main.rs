@@ -5,6 +5,7 @@ mod contact;
 mod predict;
 mod shear;
 mod split_bottom;
+mod study;
 
 use anyhow::{Context, Result, bail};
 use clap::{Parser, Subcommand};
@@ -98,9 +99,10 @@ enum Command {
         /// The sweep's output directory (or its results archive).
         dir: PathBuf,
     },
-    /// Studies: a sweep with a report and a quick variant (run, report, status).
+    /// Studies: a sweep with a report and a quick variant (run here or submit to Slurm,
+    /// status, collect, report).
     #[command(subcommand)]
-    Study(shear::StudyCommand),
+    Study(study::StudyCommand),
     /// The results database (SQLite): import a sweep's points, export CSV, count.
     #[command(subcommand)]
     Db(shear::DbCommand),
@@ -310,7 +312,7 @@ fn run(cli: Cli) -> Result<()> {
             db,
         } => shear::sweep(&file, jobs, quiet, db.as_deref()),
         Command::Db(cmd) => shear::db(cmd),
-        Command::Study(cmd) => shear::study(cmd),
+        Command::Study(cmd) => study::study(cmd),
         Command::Compare { dir, figures } => shear::compare(&dir, figures.as_deref()),
         Command::Check { scenario } => {
             let sc = Scenario::from_file(&scenario)?;

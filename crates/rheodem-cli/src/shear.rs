@@ -6,10 +6,11 @@ use indicatif::{ProgressBar, ProgressStyle};
 use rheodem::domain::ShearDynamics;
 use rheodem::io::atomic::write_atomic;
 use rheodem::run::RunError;
+use rheodem::setups::archive::{archive_point, archived, read_archive, refresh_table};
 use rheodem::setups::results_db::ResultsDb;
 use rheodem::setups::shear_box::ShearBoxSpec;
 use rheodem::setups::sweep::{
-    POINT_FILE, PointResult, SweepSpec, archived, default_out, expand, results_csv, run_point,
+    PointResult, PointStatus, SweepSpec, default_out, expand, point_status, results_csv, run_point,
 };
 use std::path::{Path, PathBuf};
 use std::sync::Mutex;
@@ -188,7 +189,7 @@ pub fn shear_box(a: ShearBoxArgs) -> Result<()> {
     Ok(())
 }
 
-fn report(r: &PointResult, dir: &Path) {
+pub(crate) fn report(r: &PointResult, dir: &Path) {
     match &r.steady_state {
         Some(ss) => {
             println!(
@@ -236,7 +237,7 @@ pub fn sweep(path: &Path, jobs: Option<usize>, quiet: bool, db: Option<&Path>) -
 
 /// Where a sweep (read from `path`) writes its points, and its archive: paths in the file
 /// are relative to the file, so that the sweep finds its points wherever it is started from.
-fn sweep_dirs(spec: &SweepSpec, path: &Path) -> (PathBuf, Option<PathBuf>) {
+pub(crate) fn sweep_dirs(spec: &SweepSpec, path: &Path) -> (PathBuf, Option<PathBuf>) {
     let here = path.parent().unwrap_or(Path::new(""));
     let out = spec
         .out
@@ -247,7 +248,7 @@ fn sweep_dirs(spec: &SweepSpec, path: &Path) -> (PathBuf, Option<PathBuf>) {
 
 /// Runs the points of `spec` (read from `path`) that are not finished, storing each
 /// finished point in the database `db` (if any) under `study`.
-fn run_sweep(
+pub(crate) fn run_sweep(
     spec: &SweepSpec,
     path: &Path,
     study: &str,
@@ -316,7 +317,7 @@ fn run_sweep(
                                 break;
                             };
                             let archived = match (&archive, fresh) {
-                                (Some(a), true) => archive_point(a, name, &r),
+                                (Some(a), true) => archive_point(a, &r).map_err(Into::into),
                                 _ => Ok(()),
                             };
                             let stored = match &database {
@@ -358,12 +359,8 @@ fn run_sweep(
     let mut errors = errors.into_inner().unwrap_or_default();
     // The archive's table lists every point archived there, whichever sweep ran it; it is
     // rewritten only when it differs (e.g. after another sweep file added points).
-    if let Some(Err(e)) = archive
-        .as_deref()
-        .filter(|a| a.is_dir())
-        .map(refresh_archive_table)
-    {
-        errors.push(format!("{e:#}"));
+    if let Some(Err(e)) = archive.as_deref().filter(|a| a.is_dir()).map(refresh_table) {
+        errors.push(e.to_string());
     }
     let done = results
         .into_inner()
@@ -389,68 +386,6 @@ fn run_sweep(
         bail!("{} errors:\n{}", errors.len(), errors.join("\n"));
     }
     Ok(())
-}
-
-/// Rewrites `archive/results.csv` from the archived points if it is out of date.
-fn refresh_archive_table(archive: &Path) -> Result<()> {
-    let table = archive.join("results.csv");
-    let csv = results_csv(&read_archive(archive)?);
-    if std::fs::read_to_string(&table).ok().as_deref() != Some(csv.as_str()) {
-        write_atomic(&table, csv.as_bytes())
-            .with_context(|| format!("cannot write {}", table.display()))?;
-    }
-    Ok(())
-}
-
-/// Archives a freshly finished point as `archive/<name>.json` and rewrites
-/// `archive/results.csv` from every point archived there (whichever sweep file ran it).
-fn archive_point(archive: &Path, name: &str, result: &PointResult) -> Result<()> {
-    std::fs::create_dir_all(archive)
-        .with_context(|| format!("cannot create {}", archive.display()))?;
-    let json = serde_json::to_string_pretty(result)?;
-    let file = archive.join(format!("{name}.json"));
-    write_atomic(&file, json.as_bytes())
-        .with_context(|| format!("cannot write {}", file.display()))?;
-    refresh_archive_table(archive)
-}
-
-/// Every point result archived in `dir` as `<name>.json`, in file-name order.
-fn read_archive(dir: &Path) -> Result<Vec<PointResult>> {
-    let mut files: Vec<PathBuf> = std::fs::read_dir(dir)
-        .with_context(|| format!("cannot read {}", dir.display()))?
-        .filter_map(|e| e.ok().map(|e| e.path()))
-        .filter(|p| p.extension().is_some_and(|e| e == "json"))
-        .collect();
-    files.sort();
-    files
-        .iter()
-        .map(|file| {
-            let text = std::fs::read_to_string(file)
-                .with_context(|| format!("cannot read {}", file.display()))?;
-            serde_json::from_str::<PointResult>(&text)
-                .with_context(|| format!("{} is not a point result", file.display()))
-        })
-        .collect()
-}
-
-/// How far an unfinished sweep point got, from its `summary.json`.
-fn point_progress(point: &Path) -> String {
-    let Some(v) = std::fs::read_to_string(point.join("summary.json"))
-        .ok()
-        .and_then(|t| serde_json::from_str::<serde_json::Value>(&t).ok())
-    else {
-        return "started, no checkpoint yet".into();
-    };
-    let done = v["steps_done"].as_f64().unwrap_or(0.0);
-    let total = v["steps_total"].as_f64().unwrap_or(1.0).max(1.0);
-    let pct = 100.0 * done / total;
-    match v["status"].as_str() {
-        Some("failed") => format!(
-            "failed at {pct:.0} % of its steps: {}",
-            v["error"].as_str().unwrap_or("(no message)")
-        ),
-        _ => format!("{pct:.0} % of its steps (checkpointed; `rheodem sweep` resumes it)"),
-    }
 }
 
 /// The finished points of a sweep directory (its archive and its point directories) and a
@@ -480,12 +415,10 @@ fn load_results(dir: &Path) -> Result<(Vec<PointResult>, Vec<String>)> {
         if names.contains(&name) {
             continue;
         }
-        if let Ok(text) = std::fs::read_to_string(point.join("steady_state.json")) {
-            let r: PointResult = serde_json::from_str(&text)
-                .with_context(|| format!("{}/steady_state.json", point.display()))?;
-            finished.push(r);
-        } else if point.join(POINT_FILE).exists() {
-            running.push(format!("- `{name}`: {}", point_progress(&point)));
+        match point_status(&point, None) {
+            PointStatus::Finished(r) => finished.push(*r),
+            PointStatus::Waiting => {}
+            status => running.push(format!("- `{name}`: {status}")),
         }
     }
     if finished.is_empty() && running.is_empty() {
@@ -515,7 +448,9 @@ pub fn compare(dir: &Path, figures: Option<&Path>) -> Result<()> {
         let points = delta_phi_points(&finished, 0.02, 0.01);
         let figures = delta_phi_figures(&points, 0.02, 0.01)
             .map_err(|e| anyhow::anyhow!("cannot draw the Δφ figures: {e}"))?;
-        for fig in svgs.into_iter().chain(figures) {
+        let cohesion = rheodem::setups::cohesion_figures::cohesion_figures(&finished, 0.02, 0.01)
+            .map_err(|e| anyhow::anyhow!("cannot draw the cohesion figures: {e}"))?;
+        for fig in svgs.into_iter().chain(figures).chain(cohesion) {
             for (ext, bytes) in [("svg", fig.svg.as_bytes()), ("png", fig.png.as_slice())] {
                 let file = out.join(format!("{}.{ext}", fig.name));
                 write_atomic(&file, bytes)
@@ -630,134 +565,4 @@ pub fn db(cmd: DbCommand) -> Result<()> {
         }
     }
     Ok(())
-}
-
-/// The `study` subcommands (docs/studies.md).
-#[derive(clap::Subcommand)]
-pub enum StudyCommand {
-    /// Run the study's missing points (finished ones are never rerun; a killed study
-    /// resumes where it stopped).
-    Run {
-        /// The study file (TOML).
-        file: PathBuf,
-        /// Run the quick variant (fewer points, smaller systems).
-        #[arg(long)]
-        quick: bool,
-        /// Points run at once (one thread each; default: all logical CPUs).
-        #[arg(long, short)]
-        jobs: Option<usize>,
-        /// Less output.
-        #[arg(long, short)]
-        quiet: bool,
-    },
-    /// Write the study's report (Markdown, and HTML with the figures embedded) from its
-    /// finished points, into `<out>/report/`.
-    Report {
-        /// The study file (TOML).
-        file: PathBuf,
-        /// The quick variant.
-        #[arg(long)]
-        quick: bool,
-    },
-    /// How many of the study's points have finished.
-    Status {
-        /// The study file (TOML).
-        file: PathBuf,
-        /// The quick variant.
-        #[arg(long)]
-        quick: bool,
-    },
-}
-
-/// The study in `file`, its sweep for the variant, and the variant's name.
-fn study_sweep(
-    file: &Path,
-    quick: bool,
-) -> Result<(rheodem::setups::study::StudySpec, SweepSpec, String)> {
-    let text =
-        std::fs::read_to_string(file).with_context(|| format!("cannot read {}", file.display()))?;
-    let study = rheodem::setups::study::StudySpec::from_toml(&text)
-        .map_err(|e| anyhow::anyhow!("{}: {e}", file.display()))?;
-    let sweep = study
-        .sweep(quick)
-        .map_err(|e| anyhow::anyhow!("{}: {e}", file.display()))?;
-    let stem = file
-        .file_stem()
-        .map_or("study".into(), |s| s.to_string_lossy().into_owned());
-    Ok((
-        study,
-        sweep,
-        if quick { format!("{stem}-quick") } else { stem },
-    ))
-}
-
-/// The finished points of a sweep (from its archive or its point directories) and the
-/// number of its points.
-fn sweep_results(sweep: &SweepSpec, file: &Path) -> Result<(Vec<PointResult>, usize)> {
-    let points = expand(sweep)?;
-    let (out, archive) = sweep_dirs(sweep, file);
-    let mut finished = Vec::new();
-    for (name, spec) in &points {
-        if let Some(r) = archive.as_deref().and_then(|a| archived(a, name, spec)) {
-            finished.push(r);
-        } else if let Ok(text) = std::fs::read_to_string(out.join(name).join("steady_state.json")) {
-            let r: PointResult = serde_json::from_str(&text)
-                .with_context(|| format!("{}/{name}/steady_state.json", out.display()))?;
-            if r.spec == *spec {
-                finished.push(r);
-            }
-        }
-    }
-    Ok((finished, points.len()))
-}
-
-/// Runs a `study` subcommand.
-pub fn study(cmd: StudyCommand) -> Result<()> {
-    match cmd {
-        StudyCommand::Run {
-            file,
-            quick,
-            jobs,
-            quiet,
-        } => {
-            let (study, sweep, name) = study_sweep(&file, quick)?;
-            let here = file.parent().unwrap_or(Path::new(""));
-            let db = study.database.as_ref().map(|d| here.join(d));
-            run_sweep(&sweep, &file, &name, jobs, quiet, db.as_deref())
-        }
-        StudyCommand::Report { file, quick } => {
-            let (study, sweep, name) = study_sweep(&file, quick)?;
-            let (finished, total) = sweep_results(&sweep, &file)?;
-            let variant = if quick { "quick" } else { "full" };
-            let report = rheodem::setups::study::report(&study, variant, total, &finished)
-                .map_err(|e| anyhow::anyhow!("cannot build the report of {name}: {e}"))?;
-            let (out, _) = sweep_dirs(&sweep, &file);
-            let dir = out.join("report");
-            std::fs::create_dir_all(&dir)
-                .with_context(|| format!("cannot create {}", dir.display()))?;
-            let write = |file: PathBuf, bytes: &[u8]| {
-                write_atomic(&file, bytes)
-                    .with_context(|| format!("cannot write {}", file.display()))
-            };
-            for f in &report.figures {
-                write(dir.join(format!("{}.png", f.name)), &f.png)?;
-                write(dir.join(format!("{}.svg", f.name)), f.svg.as_bytes())?;
-            }
-            write(dir.join("report.md"), report.markdown.as_bytes())?;
-            let html = rheodem::setups::study::report_html(&report, &study.title);
-            write(dir.join("index.html"), html.as_bytes())?;
-            println!(
-                "report of {name} ({} of {total} points finished) in {}",
-                finished.len(),
-                dir.display()
-            );
-            Ok(())
-        }
-        StudyCommand::Status { file, quick } => {
-            let (_, sweep, name) = study_sweep(&file, quick)?;
-            let (finished, total) = sweep_results(&sweep, &file)?;
-            println!("{name}: {} of {total} points finished", finished.len());
-            Ok(())
-        }
-    }
 }

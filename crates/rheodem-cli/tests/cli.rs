@@ -178,9 +178,11 @@ fn sweep_archives_finished_points_and_does_not_rerun_them() {
     let first = rheodem(&["sweep", &sweep, "--jobs", "2", "--quiet"]);
     assert!(first.status.success(), "{first:?}");
     assert!(String::from_utf8_lossy(&first.stdout).contains("2 of 2 points finished"));
+    // (and the archive's lock file, `.lock`, which git ignores)
     let mut files: Vec<PathBuf> = std::fs::read_dir(&archive)
         .expect("archive written")
         .map(|e| e.expect("entry").path())
+        .filter(|p| p.file_name().is_some_and(|n| n != ".lock"))
         .collect();
     files.sort();
     assert_eq!(files.len(), 3, "two points and results.csv: {files:?}");

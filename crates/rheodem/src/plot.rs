@@ -71,7 +71,7 @@ const PLOT_SIZE: (u32, u32) = (800, 560);
 
 /// Renders curves and measured points with error bars as an SVG document, 800×560 pixels.
 /// Curve `k` and marker set `k` share a colour; marker sets beyond the curves get colours
-/// of their own.
+/// of their own. A curve or marker set without points is not drawn (nor put in the legend).
 pub fn plot_svg(
     labels: &Labels<'_>,
     series: &[Series<'_>],
@@ -157,7 +157,8 @@ fn draw_plot<DB: DrawingBackend>(
     };
     let ((x0, x1), (y0, y1)) = (pad(x0, x1), pad(y0, y1));
     // Headroom above the data for the legend (upper right), so that it hides nothing.
-    let entries = (series.len() + markers.len()) as f64;
+    let entries = (series.iter().filter(|s| !s.points.is_empty()).count()
+        + markers.iter().filter(|m| !m.points.is_empty()).count()) as f64;
     let y1 = y1 + (y1 - y0) * (0.08 * entries).min(0.6);
     root.fill(&WHITE).map_err(err)?;
     let mut chart = ChartBuilder::on(root)
@@ -174,7 +175,12 @@ fn draw_plot<DB: DrawingBackend>(
         .label_style(("sans-serif", 13))
         .draw()
         .map_err(err)?;
-    for (k, s) in series.iter().enumerate() {
+    // A curve without points is left out, keeping its colour for its markers.
+    for (k, s) in series
+        .iter()
+        .enumerate()
+        .filter(|(_, s)| !s.points.is_empty())
+    {
         let color = colour(k);
         chart
             .draw_series(LineSeries::new(
@@ -187,7 +193,11 @@ fn draw_plot<DB: DrawingBackend>(
                 PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2))
             });
     }
-    for (k, m) in markers.iter().enumerate() {
+    for (k, m) in markers
+        .iter()
+        .enumerate()
+        .filter(|(_, m)| !m.points.is_empty())
+    {
         let color = colour(k);
         chart
             .draw_series(m.points.iter().map(|&(x, y, e)| {

@@ -37,22 +37,37 @@ pub enum LockError {
 }
 
 impl DirLock {
-    /// Takes the lock of `dir` (which must exist) without waiting.
-    pub fn try_acquire(dir: &Path) -> Result<DirLock, LockError> {
+    /// Opens (creating) the lock file of `dir`.
+    fn open(dir: &Path) -> Result<(File, PathBuf), LockError> {
         let path = dir.join(LOCK_FILE);
-        let file = OpenOptions::new()
+        match OpenOptions::new()
             .create(true)
             .truncate(false)
             .write(true)
             .open(&path)
-            .map_err(|source| LockError::Io {
-                path: path.clone(),
-                source,
-            })?;
+        {
+            Ok(file) => Ok((file, path)),
+            Err(source) => Err(LockError::Io { path, source }),
+        }
+    }
+
+    /// Takes the lock of `dir` (which must exist) without waiting.
+    pub fn try_acquire(dir: &Path) -> Result<DirLock, LockError> {
+        let (file, path) = DirLock::open(dir)?;
         match file.try_lock() {
             Ok(()) => Ok(DirLock { file, path }),
             Err(TryLockError::WouldBlock) => Err(LockError::Busy(dir.to_path_buf())),
             Err(TryLockError::Error(source)) => Err(LockError::Io { path, source }),
+        }
+    }
+
+    /// Takes the lock of `dir` (which must exist), waiting for whoever holds it: for short
+    /// critical sections (rewriting a shared table), never for whole runs.
+    pub fn acquire(dir: &Path) -> Result<DirLock, LockError> {
+        let (file, path) = DirLock::open(dir)?;
+        match file.lock() {
+            Ok(()) => Ok(DirLock { file, path }),
+            Err(source) => Err(LockError::Io { path, source }),
         }
     }
 
@@ -82,7 +97,17 @@ mod tests {
         let second = DirLock::try_acquire(&dir);
         assert!(matches!(second, Err(LockError::Busy(_))), "{second:?}");
         drop(first);
-        DirLock::try_acquire(&dir).expect("released");
+        let held = DirLock::try_acquire(&dir).expect("released");
+        // A blocking acquire returns once the holder lets go.
+        let waiter = std::thread::spawn({
+            let dir = dir.clone();
+            move || DirLock::acquire(&dir).map(|_| std::time::Instant::now())
+        });
+        std::thread::sleep(std::time::Duration::from_millis(100));
+        let released = std::time::Instant::now();
+        drop(held);
+        let got = waiter.join().expect("thread").expect("acquired");
+        assert!(got >= released, "the blocking lock did not wait");
         std::fs::remove_dir_all(&dir).ok();
     }
 

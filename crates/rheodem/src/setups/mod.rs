@@ -1,10 +1,13 @@
 //! Builders of the standard set-ups.
 
+pub mod archive;
+pub mod cohesion_figures;
 pub mod compare;
 pub mod law_fits;
 pub mod phase_diagram;
 pub mod results_db;
 pub mod shear_box;
+pub mod slurm;
 pub mod split_bottom;
 pub mod split_bottom_fields;
 pub mod study;

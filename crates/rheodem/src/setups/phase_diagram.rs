@@ -23,29 +23,23 @@ pub struct DeltaPhi {
     pub error: f64,
 }
 
-/// `Δφ` of every point of `results` with a steady-state average at `(I, p*)` =
-/// `(inertial, softness)` (nominal controls) that has a cohesionless partner with the same
-/// `μ_p`, dynamics, size and polydispersity; the partner itself gives `Δφ = 0`. Points
-/// whose window failed the halves test are included, as in the validation table, which
-/// flags them. Where several runs share a point the one averaged over the most strain is
-/// used.
-pub fn delta_phi_points(results: &[PointResult], inertial: f64, softness: f64) -> Vec<DeltaPhi> {
-    let at_state: Vec<&PointResult> = results
-        .iter()
-        .filter(|r| {
-            r.spec.inertial == inertial && r.spec.softness == softness && r.steady_state.is_some()
-        })
-        .collect();
+/// Of the runs with a steady-state average, the one averaged over the most strain for each
+/// state point (shear dynamics, `μ_p`, `I`, `p*`, `Bo`, cohesion, size and polydispersity);
+/// the first of equals. In the order first met.
+pub fn longest_runs<'a>(results: impl Iterator<Item = &'a PointResult>) -> Vec<&'a PointResult> {
     let window = |r: &PointResult| r.spec.strain - r.spec.transient_strain;
-    // The longest run of each (dynamics, μ_p, Bo, N, w).
     let mut best: Vec<&PointResult> = Vec::new();
-    for r in at_state {
+    for r in results.filter(|r| r.steady_state.is_some()) {
         let same = |c: &&PointResult| {
-            c.spec.shear_dynamics == r.spec.shear_dynamics
-                && c.spec.mu_p == r.spec.mu_p
-                && c.spec.bond == r.spec.bond
-                && c.spec.particles == r.spec.particles
-                && c.spec.polydispersity == r.spec.polydispersity
+            let (a, b) = (&c.spec, &r.spec);
+            a.shear_dynamics == b.shear_dynamics
+                && a.mu_p == b.mu_p
+                && a.inertial == b.inertial
+                && a.softness == b.softness
+                && a.bond == b.bond
+                && a.cohesion == b.cohesion
+                && a.particles == b.particles
+                && a.polydispersity == b.polydispersity
         };
         match best.iter_mut().find(|c| same(c)) {
             Some(c) if window(c) < window(r) => *c = r,
@@ -53,6 +47,21 @@ pub fn delta_phi_points(results: &[PointResult], inertial: f64, softness: f64) -
             None => best.push(r),
         }
     }
+    best
+}
+
+/// `Δφ` of every point of `results` with a steady-state average at `(I, p*)` =
+/// `(inertial, softness)` (nominal controls) that has a cohesionless partner with the same
+/// `μ_p`, dynamics, size and polydispersity; the partner itself gives `Δφ = 0`. Points
+/// whose window failed the halves test are included, as in the validation table, which
+/// flags them. Where several runs share a point the one averaged over the most strain is
+/// used.
+pub fn delta_phi_points(results: &[PointResult], inertial: f64, softness: f64) -> Vec<DeltaPhi> {
+    let best = longest_runs(
+        results
+            .iter()
+            .filter(|r| r.spec.inertial == inertial && r.spec.softness == softness),
+    );
     let mut out = Vec::new();
     for r in &best {
         let reference = best.iter().find(|q| {
@@ -261,6 +270,51 @@ pub struct Figure {
     pub png: Vec<u8>,
 }
 
+/// Measured points and the law's curve for one group (one `μ_p`, say), drawn in one colour.
+#[derive(Clone, Debug, Default)]
+pub struct Group {
+    /// Legend label of the measured points; the curve's is `"<law>, <label>"`.
+    pub label: String,
+    /// The law's curve `(x, y)`; empty for none (the group keeps its colour).
+    pub curve: Vec<(f64, f64)>,
+    /// Measured `(x, y, standard error of y)`.
+    pub points: Vec<(f64, f64, f64)>,
+}
+
+/// A line plot of groups: group `k`'s curve (labelled `"<law>, <label>"`) and points share
+/// colour `k`.
+pub fn group_figure(
+    name: &str,
+    axes: &Labels<'_>,
+    law: &str,
+    groups: &[Group],
+) -> Result<Figure, String> {
+    let curve_labels: Vec<String> = groups
+        .iter()
+        .map(|g| format!("{law}, {}", g.label))
+        .collect();
+    let series: Vec<Series> = groups
+        .iter()
+        .zip(&curve_labels)
+        .map(|(g, label)| Series {
+            label,
+            points: &g.curve,
+        })
+        .collect();
+    let markers: Vec<Markers> = groups
+        .iter()
+        .map(|g| Markers {
+            label: &g.label,
+            points: &g.points,
+        })
+        .collect();
+    Ok(Figure {
+        name: name.into(),
+        svg: plot_svg(axes, &series, &markers)?,
+        png: plot_png(axes, &series, &markers)?,
+    })
+}
+
 /// The map of `grid` with its `Δφ = 0` line (leaving out leading rows that are zero
 /// throughout, the reference `Bo = 0`).
 pub fn phase_map_figure(name: &str, title: &str, grid: &Grid) -> Result<Figure, String> {
@@ -319,44 +373,25 @@ pub fn delta_phi_figures(
         }
         let mut frictions: Vec<f64> = ours.iter().map(|p| p.mu_p).collect();
         frictions.dedup();
-        let labels: Vec<String> = frictions.iter().map(|m| format!("μ_p = {m}")).collect();
-        let curves: Vec<Vec<(f64, f64)>> = frictions
+        let groups: Vec<Group> = frictions
             .iter()
             .map(|&m| {
                 let law =
                     PhiLaw::for_mu_p(m).unwrap_or_else(|| PhiLaw::from_friction_dependence(m));
-                (0..=50)
-                    .map(|k| {
-                        let bo = 0.1 * k as f64;
-                        (bo, law.delta_phi(inertial, softness, bo))
-                    })
-                    .collect()
-            })
-            .collect();
-        let measured: Vec<Vec<(f64, f64, f64)>> = frictions
-            .iter()
-            .map(|&m| {
-                ours.iter()
-                    .filter(|p| p.mu_p == m)
-                    .map(|p| (p.bond, p.value, p.error))
-                    .collect()
-            })
-            .collect();
-        let law_labels: Vec<String> = labels.iter().map(|l| format!("Eq. 16, {l}")).collect();
-        let series: Vec<Series> = law_labels
-            .iter()
-            .zip(&curves)
-            .map(|(l, c)| Series {
-                label: l,
-                points: c,
-            })
-            .collect();
-        let markers: Vec<Markers> = labels
-            .iter()
-            .zip(&measured)
-            .map(|(l, m)| Markers {
-                label: l,
-                points: m,
+                Group {
+                    label: format!("μ_p = {m}"),
+                    curve: (0..=50)
+                        .map(|k| {
+                            let bo = 0.1 * k as f64;
+                            (bo, law.delta_phi(inertial, softness, bo))
+                        })
+                        .collect(),
+                    points: ours
+                        .iter()
+                        .filter(|p| p.mu_p == m)
+                        .map(|p| (p.bond, p.value, p.error))
+                        .collect(),
+                }
             })
             .collect();
         let title = format!("Δφ against Bo, {dynamics}, I = {inertial}, p* = {softness}");
@@ -365,11 +400,12 @@ pub fn delta_phi_figures(
             x: "Bond number Bo",
             y: "Δφ = φ(Bo) − φ(0)",
         };
-        out.push(Figure {
-            name: format!("delta-phi-vs-bo-{dynamics}"),
-            svg: plot_svg(&axes, &series, &markers)?,
-            png: plot_png(&axes, &series, &markers)?,
-        });
+        out.push(group_figure(
+            &format!("delta-phi-vs-bo-{dynamics}"),
+            &axes,
+            "Eq. 16",
+            &groups,
+        )?);
         let triples: Vec<(f64, f64, f64)> =
             ours.iter().map(|p| (p.mu_p, p.bond, p.value)).collect();
         if let Ok(grid) = interpolate(&triples, 101, 101) {

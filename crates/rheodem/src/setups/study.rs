@@ -181,6 +181,7 @@ pub fn report(
     let (i, p) = (study.report.inertial, study.report.softness);
     let mut figures = super::compare::comparison_figures(finished)?;
     figures.extend(delta_phi_figures(&delta_phi_points(finished, i, p), i, p)?);
+    figures.extend(super::cohesion_figures::cohesion_figures(finished, i, p)?);
     let _ = writeln!(md, "\n## Figures\n");
     for f in &figures {
         let _ = writeln!(md, "![{0}]({0}.png)\n", f.name);

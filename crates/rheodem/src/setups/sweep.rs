@@ -307,12 +307,94 @@ pub fn results_csv(results: &[PointResult]) -> String {
     s
 }
 
-/// A finished point's result archived as `dir/<name>.json`, if it matches `spec`.
-pub fn archived(dir: &Path, name: &str, spec: &ShearBoxSpec) -> Option<PointResult> {
-    let text = std::fs::read_to_string(dir.join(format!("{name}.json"))).ok()?;
-    serde_json::from_str::<PointResult>(&text)
+/// Where one point of a sweep stands, read from its run directory.
+#[derive(Clone, Debug)]
+pub enum PointStatus {
+    /// Finished, with its result.
+    Finished(Box<PointResult>),
+    /// A process is running it now (it holds the directory's lock); the fraction of its
+    /// steps done at its last checkpoint.
+    Running(f64),
+    /// Started and checkpointed, but no process is on it: the next sweep or study run
+    /// resumes it from the fraction of its steps given.
+    Stopped(f64),
+    /// Its last run failed at the fraction of its steps given, with the message.
+    Failed(f64, String),
+    /// Not started.
+    Waiting,
+}
+
+impl std::fmt::Display for PointStatus {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            PointStatus::Finished(_) => write!(f, "finished"),
+            PointStatus::Running(x) => write!(f, "running, {:.0} % of its steps", 100.0 * x),
+            PointStatus::Stopped(x) => write!(
+                f,
+                "stopped at {:.0} % of its steps (checkpointed; the next run resumes it)",
+                100.0 * x
+            ),
+            PointStatus::Failed(x, e) => {
+                write!(f, "failed at {:.0} % of its steps: {e}", 100.0 * x)
+            }
+            PointStatus::Waiting => write!(f, "not started"),
+        }
+    }
+}
+
+/// The status of the point whose run directory is `dir`; with `spec`, a finished result
+/// of other parameters does not count (the point is then waiting to be rerun).
+pub fn point_status(dir: &Path, spec: Option<&ShearBoxSpec>) -> PointStatus {
+    if let Some(r) = std::fs::read_to_string(dir.join("steady_state.json"))
         .ok()
-        .filter(|r| r.spec == *spec)
+        .and_then(|t| serde_json::from_str::<PointResult>(&t).ok())
+        .filter(|r| spec.is_none_or(|s| r.spec == *s))
+    {
+        return PointStatus::Finished(Box::new(r));
+    }
+    if !dir.join(POINT_FILE).exists() {
+        return PointStatus::Waiting;
+    }
+    let summary = std::fs::read_to_string(dir.join("summary.json"))
+        .ok()
+        .and_then(|t| serde_json::from_str::<serde_json::Value>(&t).ok());
+    let done = summary.as_ref().map_or(0.0, |v| {
+        v["steps_done"].as_f64().unwrap_or(0.0) / v["steps_total"].as_f64().unwrap_or(1.0).max(1.0)
+    });
+    let running = matches!(
+        crate::io::lock::DirLock::try_acquire(dir),
+        Err(crate::io::lock::LockError::Busy(_))
+    );
+    match summary.as_ref().and_then(|v| v["status"].as_str()) {
+        _ if running => PointStatus::Running(done),
+        Some("failed") => PointStatus::Failed(
+            done,
+            summary
+                .as_ref()
+                .and_then(|v| v["error"].as_str())
+                .unwrap_or("(no message)")
+                .to_string(),
+        ),
+        _ => PointStatus::Stopped(done),
+    }
+}
+
+/// The status of every point of a sweep whose points run in `out`, archived (if at all) in
+/// `archive`: a point archived with its parameters is finished wherever it ran.
+pub fn sweep_status(
+    points: &[(String, ShearBoxSpec)],
+    out: &Path,
+    archive: Option<&Path>,
+) -> Vec<PointStatus> {
+    points
+        .iter()
+        .map(
+            |(name, spec)| match archive.and_then(|a| super::archive::archived(a, name, spec)) {
+                Some(r) => PointStatus::Finished(Box::new(r)),
+                None => point_status(&out.join(name), Some(spec)),
+            },
+        )
+        .collect()
 }
 
 /// Default output directory of a sweep file: `runs/<file name>` beside the file.
