@@ -99,6 +99,16 @@ enum Command {
         /// The sweep's output directory (or its results archive).
         dir: PathBuf,
     },
+    /// The wet split-bottom study of Roy et al. 2017 over finished split-bottom runs: c*
+    /// against the rupture distance and the surface tension, torques, with the papers'
+    /// coefficients (markdown) and figures.
+    WetStudy {
+        /// Run directories, or directories holding run directories.
+        dirs: Vec<PathBuf>,
+        /// Write the figures (PNG and SVG) into this directory.
+        #[arg(long)]
+        figures: Option<PathBuf>,
+    },
     /// Studies: a sweep with a report and a quick variant (run here or submit to Slurm,
     /// status, collect, report).
     #[command(subcommand)]
@@ -304,6 +314,7 @@ fn run(cli: Cli) -> Result<()> {
         Command::Contact(cmd) => contact::run(cmd),
         Command::Predict(args) => predict::run(&args),
         Command::Fit { dir } => shear::fit(&dir),
+        Command::WetStudy { dirs, figures } => split_bottom::wet_study(&dirs, figures.as_deref()),
         Command::ShearBox(args) => shear::shear_box(args),
         Command::Sweep {
             file,

@@ -1,8 +1,9 @@
 //! `rheodem split-bottom`: the split-bottom ring shear cell (fill, settle, shear).
 
-use anyhow::{Context, Result};
+use anyhow::{Context, Result, bail};
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
+use rheodem::io::atomic::write_atomic;
 use rheodem::setups::split_bottom::{
     Cohesion, SplitBottomRun, SplitBottomSpec, Stage, TimeStepRule,
 };
@@ -240,5 +241,63 @@ pub fn run(args: SplitBottomArgs) -> Result<()> {
         }
     }
     println!("outputs in {}", dir.display());
+    Ok(())
+}
+
+/// Runs `wet-study`: the runs found in `dirs` (each a run directory, or a directory of
+/// them), their fits as markdown, the figures into `figures`.
+pub fn wet_study(dirs: &[PathBuf], figures: Option<&Path>) -> Result<()> {
+    use rheodem::setups::wet_study::{WetRun, wet_study};
+    let mut runs = Vec::new();
+    let mut left_out = Vec::new();
+    for dir in dirs {
+        let candidates: Vec<PathBuf> = if dir.join("summary.json").exists() {
+            vec![dir.clone()]
+        } else {
+            let mut subs: Vec<PathBuf> = std::fs::read_dir(dir)
+                .with_context(|| format!("cannot read {}", dir.display()))?
+                .filter_map(|e| e.ok().map(|e| e.path()))
+                .filter(|p| p.join("summary.json").exists())
+                .collect();
+            subs.sort();
+            subs
+        };
+        for c in candidates {
+            match WetRun::read(&c) {
+                Ok(r) => runs.push(r),
+                Err(e) => left_out.push(e),
+            }
+        }
+    }
+    if runs.is_empty() {
+        bail!(
+            "no finished split-bottom run with band rheology in {}{}",
+            dirs.iter()
+                .map(|d| d.display().to_string())
+                .collect::<Vec<_>>()
+                .join(", "),
+            if left_out.is_empty() {
+                String::new()
+            } else {
+                format!(" ({})", left_out.join("; "))
+            }
+        );
+    }
+    let study = wet_study(&runs).map_err(|e| anyhow::anyhow!("cannot draw the figures: {e}"))?;
+    print!("{}", study.markdown);
+    if !left_out.is_empty() {
+        println!("\nLeft out:\n- {}", left_out.join("\n- "));
+    }
+    if let Some(out) = figures {
+        std::fs::create_dir_all(out).with_context(|| format!("cannot create {}", out.display()))?;
+        for f in &study.figures {
+            for (ext, bytes) in [("svg", f.svg.as_bytes()), ("png", f.png.as_slice())] {
+                let file = out.join(format!("{}.{ext}", f.name));
+                write_atomic(&file, bytes)
+                    .with_context(|| format!("cannot write {}", file.display()))?;
+            }
+        }
+        eprintln!("{} figures in {}", study.figures.len(), out.display());
+    }
     Ok(())
 }

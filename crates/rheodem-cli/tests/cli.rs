@@ -306,6 +306,48 @@ fn fit_tabulates_the_archive_against_the_paper() {
     assert!(String::from_utf8_lossy(&out.stderr).contains("no sweep results"));
 }
 
+/// `wet-study` over the committed split-bottom validation runs: the per-run table, the
+/// fit of Eq. 20 over the three bridge volumes at 0.020 N/m beside the papers' slope, the
+/// figures; a directory without runs is named in the error.
+#[test]
+fn wet_study_fits_the_committed_split_bottom_runs() {
+    let figures = temp("wet-figures");
+    let fig = figures.to_string_lossy().into_owned();
+    let out = rheodem(&[
+        "wet-study",
+        "validation/runs-split-bottom-fields",
+        "--figures",
+        &fig,
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        text.contains("| wet-g0.02-v75 | Willett 75 nl, 0.02 N/m | 0.5 | 9.81 | 0.225 | 0.402 |"),
+        "{text}"
+    );
+    assert!(text.contains("the papers give `a` = 0.9805"), "{text}");
+    assert!(
+        text.lines()
+            .any(|l| l.starts_with("| 0.02 | 0.5, 9.81 | 3 | ")),
+        "{text}"
+    );
+    for name in [
+        "cstar-vs-rupture",
+        "cstar-vs-tension",
+        "torque-macro-vs-wall",
+    ] {
+        assert!(figures.join(format!("{name}.png")).exists(), "{name}");
+    }
+    let out = rheodem(&["wet-study", "examples"]);
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("no finished split-bottom run"));
+    let _ = std::fs::remove_dir_all(&figures);
+}
+
 /// Four processes import the validation archive into one database at the same moment,
 /// under four study names: every point of every study is there, and the CSV export lists
 /// them.

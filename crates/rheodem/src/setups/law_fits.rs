@@ -17,30 +17,7 @@ use std::fmt::Write;
 /// point (same `μ_p, I, p*, Bo`, cohesion law, dynamics, size and polydispersity), the one
 /// averaged over the most strain is kept.
 pub fn fit_groups(results: &[PointResult]) -> Vec<(ShearDynamics, f64, Vec<MeasuredPoint>)> {
-    let mut chosen: Vec<&PointResult> = Vec::new();
-    for r in results.iter().filter(|r| r.steady_state.is_some()) {
-        let same = |c: &&PointResult| {
-            let (a, b) = (&c.spec, &r.spec);
-            a.mu_p == b.mu_p
-                && a.inertial == b.inertial
-                && a.softness == b.softness
-                && a.bond == b.bond
-                && a.cohesion == b.cohesion
-                && a.shear_dynamics == b.shear_dynamics
-                && a.particles == b.particles
-                && a.polydispersity == b.polydispersity
-        };
-        match chosen.iter_mut().find(|c| same(c)) {
-            Some(c)
-                if c.spec.strain - c.spec.transient_strain
-                    < r.spec.strain - r.spec.transient_strain =>
-            {
-                *c = r
-            }
-            Some(_) => {}
-            None => chosen.push(r),
-        }
-    }
+    let chosen = super::phase_diagram::longest_runs(results.iter());
     let mut groups: Vec<(ShearDynamics, f64, Vec<MeasuredPoint>)> = Vec::new();
     for r in chosen {
         let ss = r.steady_state.as_ref().expect("filtered");

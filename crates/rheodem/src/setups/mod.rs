@@ -12,3 +12,4 @@ pub mod split_bottom;
 pub mod split_bottom_fields;
 pub mod study;
 pub mod sweep;
+pub mod wet_study;

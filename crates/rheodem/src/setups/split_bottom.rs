@@ -1318,19 +1318,10 @@ impl SplitBottomRun {
                 "kernel": self.spec.cg_kernel,
                 "width": self.spec.cg_width * self.spec.diameter,
             })),
-            "band_rheology": band.as_ref().map(|b| serde_json::json!({
-                "pressure_min": b.pressure_min,
-                "points": b.points.len(),
-                "fit": b.fit,
-                "cohesion_scaled": b.cohesion_scaled,
-                "pressure_avg": b.pressure_avg,
-                "torque_factor": b.torque_factor,
-                "torque_macro": b.torque_macro,
-                "torque_measured": self.results().net_torque.map(|e| e.mean),
-                "cohesion_from_torque": b.fit.zip(self.results().net_torque).map(|(f, t)|
-                    t.mean / b.torque_factor - f.slope * b.pressure_avg),
-                "shear_box_laws": b.laws,
-            })),
+            "band_rheology": band.as_ref().map(|b| cell_fields::BandSummary::new(
+                b,
+                self.results().net_torque.map(|e| e.mean),
+            )),
         });
         let path = dir.join("summary.json");
         let text = serde_json::to_string_pretty(&summary).unwrap_or_default();

@@ -254,9 +254,55 @@ pub struct BandRheology {
     pub laws: Option<LawComparison>,
 }
 
+/// The band rheology of a run as its `summary.json` records it (`band_rheology`).
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct BandSummary {
+    /// Lowest pressure fitted (Pa).
+    pub pressure_min: f64,
+    /// Rheology points of the centre regions (fitted or not).
+    pub points: usize,
+    /// `τ = μ P + c` (`c` in Pa), if there were enough points.
+    pub fit: Option<LinearFit>,
+    /// `c* = c d_p² / f_g`.
+    pub cohesion_scaled: Option<f64>,
+    /// Mean pressure of the fitted points `P_avg` (Pa).
+    pub pressure_avg: f64,
+    /// `M` of Roy et al. 2016, Eq. 26 (m³).
+    pub torque_factor: f64,
+    /// `T_macro = M (μ P_avg + c)` of the full ring (N m).
+    pub torque_macro: Option<f64>,
+    /// The measured wall torque of the full ring, the mean of the window (N m).
+    pub torque_measured: Option<f64>,
+    /// `c_eq = T/M − μ P_avg` (Pa; Roy et al. 2016, Eq. 27).
+    pub cohesion_from_torque: Option<f64>,
+    /// The band against the shear box's laws.
+    pub shear_box_laws: Option<LawComparison>,
+}
+
+impl BandSummary {
+    /// The summary of `band` with the run's measured wall torque `torque` (N m).
+    pub fn new(band: &BandRheology, torque: Option<f64>) -> BandSummary {
+        BandSummary {
+            pressure_min: band.pressure_min,
+            points: band.points.len(),
+            fit: band.fit,
+            cohesion_scaled: band.cohesion_scaled,
+            pressure_avg: band.pressure_avg,
+            torque_factor: band.torque_factor,
+            torque_macro: band.torque_macro,
+            torque_measured: torque,
+            cohesion_from_torque: band
+                .fit
+                .zip(torque)
+                .map(|(f, t)| t / band.torque_factor - f.slope * band.pressure_avg),
+            shear_box_laws: band.laws,
+        }
+    }
+}
+
 /// Ratios of a quantity measured at the band points to a law's prediction at the same local
 /// numbers: their mean and its standard error, over the points inside the law's fit range.
-#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Ratio {
     /// Mean of measured over predicted.
     pub mean: f64,
@@ -287,7 +333,7 @@ impl Ratio {
 /// `φ(I, p*, Bo)` over its fit range (`φ > 0.5`, `I < 0.25`, `p* < 0.03`) and `μ(I, p*, Bo)`
 /// over its own (`0.005 < I < 0.5`, `p* < 0.1`), at the band points above the fitted
 /// pressure cut-off.
-#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct LawComparison {
     /// `μ_p` of the laws' row.
     pub mu_p: f64,
