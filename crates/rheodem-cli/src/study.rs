@@ -7,8 +7,11 @@ use rheodem::io::atomic::write_atomic;
 use rheodem::run::RunError;
 use rheodem::setups::archive::{archive_point, refresh_table};
 use rheodem::setups::results_db::ResultsDb;
+use rheodem::setups::shear_box::ShearBoxSpec;
 use rheodem::setups::slurm::{self, SUBMISSION_FILE, SlurmOptions, Submission};
-use rheodem::setups::study::StudySpec;
+use rheodem::setups::split_bottom::SplitBottomSpec;
+use rheodem::setups::split_bottom_study;
+use rheodem::setups::study::{SetUp, StudySpec};
 use rheodem::setups::sweep::{
     PointResult, PointStatus, SweepSpec, expand, run_point, sweep_status,
 };
@@ -114,20 +117,39 @@ pub enum StudyCommand {
     },
 }
 
+/// A status without what the finished point gave.
+fn strip<R>(st: PointStatus<R>) -> PointStatus<()> {
+    match st {
+        PointStatus::Finished(_) => PointStatus::Finished(()),
+        PointStatus::Running(x) => PointStatus::Running(x),
+        PointStatus::Stopped(x) => PointStatus::Stopped(x),
+        PointStatus::Failed(x, e) => PointStatus::Failed(x, e),
+        PointStatus::Waiting => PointStatus::Waiting,
+    }
+}
+
+/// The points of a study's variant, by set-up.
+enum Points {
+    /// Shear-box points.
+    ShearBox(Vec<(String, ShearBoxSpec)>),
+    /// Split-bottom points.
+    SplitBottom(Vec<(String, SplitBottomSpec)>),
+}
+
 /// A study file read with its sweep for one variant.
 struct Loaded {
     /// The study file, absolute.
     file: PathBuf,
     /// The study.
     study: StudySpec,
-    /// The variant's sweep.
+    /// The variant's output directory, archive and tables.
     sweep: SweepSpec,
     /// The variant's name (the file's stem, `-quick` for the quick variant).
     name: String,
     /// Whether this is the quick variant.
     quick: bool,
     /// The variant's points.
-    points: Vec<(String, rheodem::setups::shear_box::ShearBoxSpec)>,
+    points: Points,
     /// Where the points run.
     out: PathBuf,
     /// The archive of finished points, if the variant keeps one.
@@ -143,12 +165,15 @@ impl Loaded {
         let study =
             StudySpec::from_toml(&text).map_err(|e| anyhow::anyhow!("{}: {e}", file.display()))?;
         let sweep = study
-            .sweep(quick)
+            .variant(quick)
             .map_err(|e| anyhow::anyhow!("{}: {e}", file.display()))?;
         let stem = file
             .file_stem()
             .map_or("study".into(), |s| s.to_string_lossy().into_owned());
-        let points = expand(&sweep)?;
+        let points = match study.setup {
+            SetUp::ShearBox => Points::ShearBox(expand(&sweep)?),
+            SetUp::SplitBottom => Points::SplitBottom(study.split_bottom_points(quick)?),
+        };
         let (out, archive) = sweep_dirs(&sweep, &file);
         Ok(Loaded {
             study,
@@ -168,17 +193,65 @@ impl Loaded {
         self.study.database.as_ref().map(|d| here.join(d))
     }
 
-    /// Every point's status.
-    fn status(&self) -> Vec<PointStatus> {
-        sweep_status(&self.points, &self.out, self.archive.as_deref())
+    /// The points' names, in order.
+    fn names(&self) -> Vec<&str> {
+        match &self.points {
+            Points::ShearBox(p) => p.iter().map(|(n, _)| n.as_str()).collect(),
+            Points::SplitBottom(p) => p.iter().map(|(n, _)| n.as_str()).collect(),
+        }
     }
 
-    /// The finished points.
+    /// Every point's status (what a finished point gave left out).
+    fn status(&self) -> Vec<PointStatus<()>> {
+        match &self.points {
+            Points::ShearBox(p) => sweep_status(p, &self.out, self.archive.as_deref())
+                .into_iter()
+                .map(strip)
+                .collect(),
+            Points::SplitBottom(p) => self.cell_status(p).into_iter().map(strip).collect(),
+        }
+    }
+
+    /// The status of split-bottom points: archived, or from their directories.
+    fn cell_status(&self, points: &[(String, SplitBottomSpec)]) -> Vec<PointStatus<PathBuf>> {
+        points
+            .iter()
+            .map(|(name, spec)| {
+                match self
+                    .archive
+                    .as_deref()
+                    .and_then(|a| split_bottom_study::archived(a, name, spec))
+                {
+                    Some(file) => PointStatus::Finished(file),
+                    None => split_bottom_study::point_status(&self.out.join(name), spec),
+                }
+            })
+            .collect()
+    }
+
+    /// The finished shear-box points.
     fn finished(&self) -> Vec<PointResult> {
-        self.status()
+        let Points::ShearBox(p) = &self.points else {
+            return Vec::new();
+        };
+        sweep_status(p, &self.out, self.archive.as_deref())
             .into_iter()
             .filter_map(|s| match s {
                 PointStatus::Finished(r) => Some(*r),
+                _ => None,
+            })
+            .collect()
+    }
+
+    /// The finished split-bottom points: name and `summary.json`.
+    fn finished_cells(&self) -> Vec<(String, PathBuf)> {
+        let Points::SplitBottom(p) = &self.points else {
+            return Vec::new();
+        };
+        p.iter()
+            .zip(self.cell_status(p))
+            .filter_map(|((name, _), st)| match st {
+                PointStatus::Finished(file) => Some((name.clone(), file)),
                 _ => None,
             })
             .collect()
@@ -195,14 +268,17 @@ pub fn study(cmd: StudyCommand) -> Result<()> {
             quiet,
         } => {
             let s = Loaded::new(&file, quick)?;
-            run_sweep(
-                &s.sweep,
-                &s.file,
-                &s.name,
-                jobs,
-                quiet,
-                s.database().as_deref(),
-            )
+            match &s.points {
+                Points::ShearBox(_) => run_sweep(
+                    &s.sweep,
+                    &s.file,
+                    &s.name,
+                    jobs,
+                    quiet,
+                    s.database().as_deref(),
+                ),
+                Points::SplitBottom(points) => run_cells(&s, points, jobs, quiet),
+            }
         }
         StudyCommand::Submit {
             file,
@@ -243,11 +319,26 @@ pub fn study(cmd: StudyCommand) -> Result<()> {
 
 /// Writes the study's report into `<out>/report/`.
 fn report(s: &Loaded) -> Result<()> {
-    let finished = s.finished();
-    let total = s.points.len();
+    let total = s.names().len();
     let variant = if s.quick { "quick" } else { "full" };
-    let report = rheodem::setups::study::report(&s.study, variant, total, &finished)
-        .map_err(|e| anyhow::anyhow!("cannot build the report of {}: {e}", s.name))?;
+    let (report, done) = match &s.points {
+        Points::ShearBox(_) => {
+            let finished = s.finished();
+            (
+                rheodem::setups::study::report(&s.study, variant, total, &finished),
+                finished.len(),
+            )
+        }
+        Points::SplitBottom(_) => {
+            let finished = s.finished_cells();
+            (
+                rheodem::setups::study::split_bottom_report(&s.study, variant, total, &finished),
+                finished.len(),
+            )
+        }
+    };
+    let report =
+        report.map_err(|e| anyhow::anyhow!("cannot build the report of {}: {e}", s.name))?;
     let dir = s.out.join("report");
     std::fs::create_dir_all(&dir).with_context(|| format!("cannot create {}", dir.display()))?;
     let write = |file: PathBuf, bytes: &[u8]| {
@@ -261,9 +352,8 @@ fn report(s: &Loaded) -> Result<()> {
     let html = rheodem::setups::study::report_html(&report, &s.study.title);
     write(dir.join("index.html"), html.as_bytes())?;
     println!(
-        "report of {} ({} of {total} points finished) in {}",
+        "report of {} ({done} of {total} points finished) in {}",
         s.name,
-        finished.len(),
         dir.display()
     );
     Ok(())
@@ -271,38 +361,55 @@ fn report(s: &Loaded) -> Result<()> {
 
 /// Runs (or resumes) the point `name` of the study with `threads` threads.
 fn run_one(s: &Loaded, name: &str, threads: usize) -> Result<()> {
-    let Some((_, spec)) = s.points.iter().find(|(n, _)| n == name) else {
-        bail!(
+    let missing = || {
+        anyhow::anyhow!(
             "{} has no point named {name:?} (`rheodem study status {} --points` lists them)",
             s.file.display(),
             s.file.display()
-        );
+        )
     };
-    let archived = s.archive.as_deref();
-    if archived.is_some_and(|a| rheodem::setups::archive::archived(a, name, spec).is_some()) {
-        println!("{name}: finished already (archived)");
-        return Ok(());
-    }
     let (pool, n) = crate::pool(Some(threads))?;
     let dir = s.out.join(name);
-    let mut last = 0;
-    let outcome = pool.install(|| {
-        run_point(name, spec, &dir, n, &mut |done, total| {
-            let pct = done * 100 / total.max(1);
-            if pct >= last + 10 {
-                last = pct;
-                eprintln!("  {name}: {pct} %");
+    let outcome = match &s.points {
+        Points::ShearBox(points) => {
+            let (_, spec) = points.iter().find(|(n, _)| n == name).ok_or_else(missing)?;
+            let archive = s.archive.as_deref();
+            if archive.is_some_and(|a| rheodem::setups::archive::archived(a, name, spec).is_some())
+            {
+                println!("{name}: finished already (archived)");
+                return Ok(());
             }
-        })
-    });
-    match outcome {
-        Ok(r) => {
-            if let Some(a) = &s.archive {
-                archive_point(a, &r)?;
-            }
-            report_point(&r, &dir);
-            Ok(())
+            let mut last = 0;
+            pool.install(|| {
+                run_point(name, spec, &dir, n, &mut |done, total| {
+                    let pct = done * 100 / total.max(1);
+                    if pct >= last + 10 {
+                        last = pct;
+                        eprintln!("  {name}: {pct} %");
+                    }
+                })
+            })
+            .map(|r| {
+                if let Some(a) = &s.archive {
+                    archive_point(a, &r)?;
+                }
+                report_point(&r, &dir);
+                Ok::<(), anyhow::Error>(())
+            })
         }
+        Points::SplitBottom(points) => {
+            let (_, spec) = points.iter().find(|(n, _)| n == name).ok_or_else(missing)?;
+            let archive = s.archive.as_deref();
+            if archive.is_some_and(|a| split_bottom_study::archived(a, name, spec).is_some()) {
+                println!("{name}: finished already (archived)");
+                return Ok(());
+            }
+            pool.install(|| run_cell(name, spec, &dir, archive))
+                .map(|()| Ok(()))
+        }
+    };
+    match outcome {
+        Ok(done) => done,
         Err(RunError::Busy(_)) => {
             println!("{name}: being run by another process; left to it");
             Ok(())
@@ -311,8 +418,118 @@ fn run_one(s: &Loaded, name: &str, threads: usize) -> Result<()> {
     }
 }
 
+/// Runs (or resumes) one split-bottom point in `dir` with the current pool, archives it
+/// and prints its torque and cohesion.
+fn run_cell(
+    name: &str,
+    spec: &SplitBottomSpec,
+    dir: &Path,
+    archive: Option<&Path>,
+) -> Result<(), RunError> {
+    let mut last = (None, 0);
+    let summary = split_bottom_study::run_point(spec, dir, &mut |stage, done, total| {
+        let pct = done * 100 / total.max(1);
+        if last.0 != Some(stage) || pct >= last.1 + 10 {
+            last = (Some(stage), pct);
+            eprintln!("  {name}: {stage:?} {pct} %");
+        }
+    })?;
+    if let Some(a) = archive {
+        split_bottom_study::archive_point(a, name, &summary)?;
+    }
+    match rheodem::setups::wet_study::WetRun::read_summary(&summary, name) {
+        Ok(r) => println!(
+            "{name}: μ = {:.4} ± {:.4}, c* = {:.3} ± {:.3}, T* = {:.4e}",
+            r.mu.0, r.mu.1, r.cohesion.0, r.cohesion.1, r.torque.0
+        ),
+        Err(e) => println!("{name}: finished ({e})"),
+    }
+    Ok(())
+}
+
+/// Runs the missing split-bottom points, `jobs` at a time with one thread each.
+fn run_cells(
+    s: &Loaded,
+    points: &[(String, SplitBottomSpec)],
+    jobs: Option<usize>,
+    quiet: bool,
+) -> Result<()> {
+    let jobs = crate::worker_count(
+        "--jobs",
+        jobs.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get())),
+    )?;
+    std::fs::create_dir_all(&s.out)
+        .with_context(|| format!("cannot create {}", s.out.display()))?;
+    eprintln!(
+        "{} split-bottom points, {jobs} at a time → {}",
+        points.len(),
+        s.out.display()
+    );
+    let next = std::sync::atomic::AtomicUsize::new(0);
+    let errors = std::sync::Mutex::new(Vec::new());
+    std::thread::scope(|scope| {
+        for _ in 0..jobs.min(points.len()) {
+            scope.spawn(|| {
+                let pool = match rayon::ThreadPoolBuilder::new().num_threads(1).build() {
+                    Ok(p) => p,
+                    Err(e) => {
+                        errors.lock().map(|mut v| v.push(e.to_string())).ok();
+                        return;
+                    }
+                };
+                loop {
+                    let k = next.fetch_add(1, std::sync::atomic::Ordering::SeqCst);
+                    let Some((name, spec)) = points.get(k) else {
+                        break;
+                    };
+                    let archive = s.archive.as_deref();
+                    if archive
+                        .is_some_and(|a| split_bottom_study::archived(a, name, spec).is_some())
+                    {
+                        continue;
+                    }
+                    let dir = s.out.join(name);
+                    match pool.install(|| run_cell(name, spec, &dir, archive)) {
+                        Ok(()) => {}
+                        Err(RunError::Busy(_)) => {
+                            if !quiet {
+                                eprintln!("  {name}: being run by another process; skipped");
+                            }
+                        }
+                        Err(e) => {
+                            errors
+                                .lock()
+                                .map(|mut v| v.push(format!("{name}: {e}")))
+                                .ok();
+                        }
+                    }
+                }
+            });
+        }
+    });
+    let done = s.finished_cells().len();
+    println!("{done} of {} points finished", points.len());
+    let errors = errors.into_inner().unwrap_or_default();
+    if !errors.is_empty() {
+        bail!("{} errors:\n{}", errors.len(), errors.join("\n"));
+    }
+    Ok(())
+}
+
 /// Stores every finished point in the study's database and refreshes its archive's table.
 fn collect(s: &Loaded) -> Result<()> {
+    if let Points::SplitBottom(_) = s.points {
+        println!(
+            "{} of {} points finished; split-bottom points are kept as their summary.json{} \
+             (the results database holds shear-box points)",
+            s.finished_cells().len(),
+            s.names().len(),
+            s.archive
+                .as_ref()
+                .map_or(String::new(), |a| format!(", archived in {}", a.display()))
+        );
+        return Ok(());
+    }
     let finished = s.finished();
     if let Some(a) = s.archive.as_deref().filter(|a| a.is_dir()) {
         refresh_table(a)?;
@@ -326,7 +543,7 @@ fn collect(s: &Loaded) -> Result<()> {
             println!(
                 "{} of {} points finished; {} stored under study {:?} in {}",
                 finished.len(),
-                s.points.len(),
+                s.names().len(),
                 database.count(Some(&s.name))?,
                 s.name,
                 db.display()
@@ -335,7 +552,7 @@ fn collect(s: &Loaded) -> Result<()> {
         None => println!(
             "{} of {} points finished; the study names no database to store them in",
             finished.len(),
-            s.points.len()
+            s.names().len()
         ),
     }
     Ok(())
@@ -366,14 +583,14 @@ fn submit(s: &Loaded, opts: &SlurmOptions, rheodem: Option<PathBuf>, dry_run: bo
     };
     let status = s.status();
     let missing: Vec<&str> = s
-        .points
-        .iter()
+        .names()
+        .into_iter()
         .zip(&status)
-        .filter(|((name, _), st)| {
+        .filter(|(name, st)| {
             !matches!(st, PointStatus::Finished(_) | PointStatus::Running(_))
-                && !queued.contains(name)
+                && !queued.iter().any(|q| q == name)
         })
-        .map(|((name, _), _)| name.as_str())
+        .map(|(name, _)| name)
         .collect();
     if missing.is_empty() {
         println!(
@@ -383,7 +600,7 @@ fn submit(s: &Loaded, opts: &SlurmOptions, rheodem: Option<PathBuf>, dry_run: bo
                 .iter()
                 .filter(|st| matches!(st, PointStatus::Finished(_)))
                 .count(),
-            s.points.len()
+            status.len()
         );
         return Ok(());
     }
@@ -457,13 +674,9 @@ fn submit(s: &Loaded, opts: &SlurmOptions, rheodem: Option<PathBuf>, dry_run: bo
 /// Prints how far the study is.
 fn status(s: &Loaded, list: bool) -> Result<()> {
     let status = s.status();
-    let count = |f: fn(&PointStatus) -> bool| status.iter().filter(|st| f(st)).count();
+    let count = |f: fn(&PointStatus<()>) -> bool| status.iter().filter(|st| f(st)).count();
     let finished = count(|s| matches!(s, PointStatus::Finished(_)));
-    println!(
-        "{}: {finished} of {} points finished",
-        s.name,
-        s.points.len()
-    );
+    println!("{}: {finished} of {} points finished", s.name, status.len());
     println!(
         "  running {}, stopped {}, failed {}, not started {}",
         count(|s| matches!(s, PointStatus::Running(_))),
@@ -471,7 +684,7 @@ fn status(s: &Loaded, list: bool) -> Result<()> {
         count(|s| matches!(s, PointStatus::Failed(..))),
         count(|s| matches!(s, PointStatus::Waiting))
     );
-    for ((name, _), st) in s.points.iter().zip(&status) {
+    for (name, st) in s.names().into_iter().zip(&status) {
         let finished = matches!(st, PointStatus::Finished(_));
         if list || matches!(st, PointStatus::Failed(..)) || (!finished && status.len() <= 20) {
             println!("  {name}: {st}");

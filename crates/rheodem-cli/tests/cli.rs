@@ -446,6 +446,65 @@ fn a_tiny_study_runs_resumes_and_reports() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
+/// A split-bottom study end to end on a small cell: `study run` runs its two points (dry
+/// and wet, chosen through a dotted grid key), a second run finds them archived, the status
+/// counts them, the report builds from the archive, and a cluster task of a finished point
+/// does nothing.
+#[test]
+fn a_split_bottom_study_runs_and_reports() {
+    let dir = temp("cell-study");
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    let file = dir.join("cells.toml");
+    std::fs::write(
+        &file,
+        "title = \"two small cells\"\nsetup = \"split-bottom\"\nout = \"runs/cells\"\n\
+         results = \"archive\"\n[base]\ninner_radius = 0.02\nouter_radius = 0.05\n\
+         split_radius = 0.035\nheight = 0.012\nomega = 1.0\nduration = 0.08\n\
+         average_from = 0.04\nrows = 16\nsnapshots = 1\ncheckpoints = 2\n\
+         time_step = \"mean-pair\"\n[grid]\n\"cohesion.law\" = [\"dry\"]\n\
+         [[point]]\ncohesion = { law = \"willett\", surface_tension = 0.02, volume = 75e-12 }\n",
+    )
+    .expect("study file");
+    let f = file.to_string_lossy().into_owned();
+    let out = rheodem(&["study", "run", &f, "--jobs", "2", "--quiet"]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(String::from_utf8_lossy(&out.stdout).contains("2 of 2 points finished"));
+    let archived = dir.join("archive/willett-g0.02-v75-omega1-g9.81-s1.json");
+    let first = std::fs::metadata(&archived)
+        .and_then(|m| m.modified())
+        .expect("archived");
+    let out = rheodem(&["study", "run", &f, "--quiet"]);
+    assert!(out.status.success());
+    let again = std::fs::metadata(&archived)
+        .and_then(|m| m.modified())
+        .expect("still archived");
+    assert_eq!(first, again, "a finished point was run again");
+    let out = rheodem(&["study", "status", &f]);
+    assert!(
+        String::from_utf8_lossy(&out.stdout).contains("cells: 2 of 2 points finished"),
+        "{}",
+        String::from_utf8_lossy(&out.stdout)
+    );
+    // The run directories may go: the report reads the archive.
+    std::fs::remove_dir_all(dir.join("runs/cells/dry-omega1-g9.81-s1")).expect("remove");
+    let out = rheodem(&["study", "report", &f]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let md = std::fs::read_to_string(dir.join("runs/cells/report/report.md")).expect("report");
+    assert!(md.starts_with("# two small cells"), "{md}");
+    assert!(md.contains("2 of 2 points finished"), "{md}");
+    let out = rheodem(&["study", "run-point", &f, "--point", "dry-omega1-g9.81-s1"]);
+    assert!(String::from_utf8_lossy(&out.stdout).contains("finished already"));
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
 /// Every shipped study reads, and has a quick variant of at most 10 points.
 #[test]
 fn shipped_studies_are_valid_and_have_quick_variants() {
@@ -458,15 +517,19 @@ fn shipped_studies_are_valid_and_have_quick_variants() {
         let text = std::fs::read_to_string(&path).expect("readable");
         let study = rheodem::setups::study::StudySpec::from_toml(&text)
             .unwrap_or_else(|e| panic!("{}: {e}", path.display()));
-        let quick = rheodem::setups::sweep::expand(&study.sweep(true).expect("quick variant"))
-            .expect("points");
-        assert!(
-            quick.len() <= 10,
-            "{}: {} quick points",
-            path.display(),
-            quick.len()
-        );
+        let quick = match study.setup {
+            rheodem::setups::study::SetUp::ShearBox => {
+                rheodem::setups::sweep::expand(&study.sweep(true).expect("quick variant"))
+                    .expect("points")
+                    .len()
+            }
+            rheodem::setups::study::SetUp::SplitBottom => study
+                .split_bottom_points(true)
+                .expect("quick variant")
+                .len(),
+        };
+        assert!(quick <= 10, "{}: {quick} quick points", path.display());
         n += 1;
     }
-    assert!(n >= 2, "{n} studies shipped");
+    assert!(n >= 3, "{n} studies shipped");
 }

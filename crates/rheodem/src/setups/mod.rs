@@ -10,6 +10,7 @@ pub mod shear_box;
 pub mod slurm;
 pub mod split_bottom;
 pub mod split_bottom_fields;
+pub mod split_bottom_study;
 pub mod study;
 pub mod sweep;
 pub mod wet_study;

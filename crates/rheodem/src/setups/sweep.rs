@@ -55,12 +55,40 @@ pub struct SweepSpec {
     pub point: Vec<toml::Table>,
 }
 
-/// Expands the sweep into its points, each with a directory name built from its controls.
-pub fn expand(spec: &SweepSpec) -> Result<Vec<(String, ShearBoxSpec)>, ScenarioError> {
-    let mut tables: Vec<toml::Table> = Vec::new();
-    if !spec.grid.is_empty() {
-        let mut combos = vec![toml::Table::new()];
-        for (key, values) in &spec.grid {
+/// Sets `key` in `table`; a dotted key (`cohesion.volume`) sets a field of a nested table,
+/// creating it where missing.
+fn set_dotted(table: &mut toml::Table, key: &str, value: toml::Value) {
+    match key.split_once('.') {
+        Some((head, rest)) => {
+            let entry = table
+                .entry(head.to_string())
+                .or_insert_with(|| toml::Value::Table(toml::Table::new()));
+            if !entry.is_table() {
+                *entry = toml::Value::Table(toml::Table::new());
+            }
+            if let toml::Value::Table(inner) = entry {
+                set_dotted(inner, rest, value);
+            }
+        }
+        None => {
+            table.insert(key.to_string(), value);
+        }
+    }
+}
+
+/// The tables of a sweep's points: `base` merged with each combination of `grid`'s value
+/// lists (in key order, the last key varying fastest), then with each of `points`. Keys of
+/// `grid` and `points` may be dotted to set a field of a nested table of `base`
+/// (`"cohesion.volume" = [14e-12, 75e-12]`).
+pub fn point_tables(
+    base: &toml::Table,
+    grid: &toml::Table,
+    points: &[toml::Table],
+) -> Result<Vec<toml::Table>, ScenarioError> {
+    let mut combos: Vec<Vec<(String, toml::Value)>> = Vec::new();
+    if !grid.is_empty() {
+        combos.push(Vec::new());
+        for (key, values) in grid {
             let list = values.as_array().ok_or_else(|| {
                 invalid(format!("grid.{key}"), values, "must be a list of values")
             })?;
@@ -76,22 +104,38 @@ pub fn expand(spec: &SweepSpec) -> Result<Vec<(String, ShearBoxSpec)>, ScenarioE
                 .flat_map(|c| {
                     list.iter().map(move |v| {
                         let mut c = c.clone();
-                        c.insert(key.clone(), v.clone());
+                        c.push((key.clone(), v.clone()));
                         c
                     })
                 })
                 .collect();
         }
-        tables.extend(combos);
     }
-    tables.extend(spec.point.iter().cloned());
-    if tables.is_empty() {
+    combos.extend(
+        points
+            .iter()
+            .map(|p| p.iter().map(|(k, v)| (k.clone(), v.clone())).collect()),
+    );
+    if combos.is_empty() {
         return Err(invalid("point", "[]", "give [[point]] entries or a [grid]"));
     }
+    Ok(combos
+        .into_iter()
+        .map(|c| {
+            let mut t = base.clone();
+            for (k, v) in c {
+                set_dotted(&mut t, &k, v);
+            }
+            t
+        })
+        .collect())
+}
+
+/// Expands the sweep into its points, each with a directory name built from its controls.
+pub fn expand(spec: &SweepSpec) -> Result<Vec<(String, ShearBoxSpec)>, ScenarioError> {
+    let tables = point_tables(&spec.base, &spec.grid, &spec.point)?;
     let mut out = Vec::new();
-    for (k, extra) in tables.into_iter().enumerate() {
-        let mut t = spec.base.clone();
-        t.extend(extra);
+    for (k, t) in tables.into_iter().enumerate() {
         let point = ShearBoxSpec::from_table(t)
             .map_err(|e| ScenarioError::Parse(format!("sweep point {k}: {e}")))?;
         point
@@ -307,11 +351,12 @@ pub fn results_csv(results: &[PointResult]) -> String {
     s
 }
 
-/// Where one point of a sweep stands, read from its run directory.
+/// Where one point of a sweep or study stands, read from its run directory; `R` is what a
+/// finished point gives (a shear-box [`PointResult`] by default).
 #[derive(Clone, Debug)]
-pub enum PointStatus {
+pub enum PointStatus<R = Box<PointResult>> {
     /// Finished, with its result.
-    Finished(Box<PointResult>),
+    Finished(R),
     /// A process is running it now (it holds the directory's lock); the fraction of its
     /// steps done at its last checkpoint.
     Running(f64),
@@ -324,7 +369,7 @@ pub enum PointStatus {
     Waiting,
 }
 
-impl std::fmt::Display for PointStatus {
+impl<R> std::fmt::Display for PointStatus<R> {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
             PointStatus::Finished(_) => write!(f, "finished"),

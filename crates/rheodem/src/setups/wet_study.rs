@@ -98,14 +98,20 @@ impl WetRun {
     /// Reads the run in `dir` from its `summary.json`; the error says why it cannot count
     /// (unreadable, not finished with band rheology, no fit).
     pub fn read(dir: &Path) -> Result<WetRun, String> {
-        let file = dir.join("summary.json");
-        let text = std::fs::read_to_string(&file)
-            .map_err(|e| format!("cannot read {}: {e}", file.display()))?;
-        let s: RunSummary = serde_json::from_str(&text)
-            .map_err(|e| format!("{} is not a split-bottom summary: {e}", file.display()))?;
         let name = dir
             .file_name()
             .map_or_else(|| dir.display().to_string(), |n| n.to_string_lossy().into());
+        WetRun::read_summary(&dir.join("summary.json"), &name)
+    }
+
+    /// Reads the run `name` from its summary `file` (a run's `summary.json`, or its copy in
+    /// a study's archive).
+    pub fn read_summary(file: &Path, name: &str) -> Result<WetRun, String> {
+        let name = name.to_string();
+        let text = std::fs::read_to_string(file)
+            .map_err(|e| format!("cannot read {}: {e}", file.display()))?;
+        let s: RunSummary = serde_json::from_str(&text)
+            .map_err(|e| format!("{} is not a split-bottom summary: {e}", file.display()))?;
         let band = s
             .band_rheology
             .ok_or_else(|| format!("{name}: no band rheology (fields off, or not finished)"))?;
