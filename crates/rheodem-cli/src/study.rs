@@ -699,7 +699,7 @@ fn status(s: &Loaded, list: bool) -> Result<()> {
                 continue;
             }
         };
-        let collecting = slurm::queue(&sub.collect_job)?;
+        let collecting = slurm::queue(&sub.collect_job).unwrap_or_default();
         let mut states: Vec<String> = tasks.iter().map(|(_, st)| st.to_lowercase()).collect();
         states.sort();
         states.dedup_by(|a, b| a == b);
