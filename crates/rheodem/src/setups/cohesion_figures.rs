@@ -251,48 +251,20 @@ fn collapse(runs: &[&PointResult], dynamics: ShearDynamics) -> Result<Figure, St
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::analysis::Estimate;
-    use crate::setups::shear_box::{ShearBoxSpec, SteadyState};
+    use crate::setups::sweep::synthetic_result;
 
     /// A run at `(μ_p, I, p*, Bo)` whose φ is the law's times `factor`.
     fn run(mu_p: f64, inertial: f64, softness: f64, bond: f64, factor: f64) -> PointResult {
-        let spec: ShearBoxSpec = toml::from_str(&format!(
-            "mu_p = {mu_p}\ninertial = {inertial}\nsoftness = {softness}\nbond = {bond}\n\
-             cohesion = \"{}\"",
-            if bond > 0.0 { "reversible" } else { "none" }
-        ))
-        .expect("spec");
-        let e = |mean| Estimate {
-            mean,
-            error: 0.001,
-            samples: 100,
-        };
-        let ss = SteadyState {
-            steady: true,
-            note: String::new(),
-            strain_window: [5.0, 15.0],
-            volume_fraction: e(law(mu_p).phi(inertial, softness, bond) * factor),
-            friction: e(0.3),
-            coordination: e(4.5),
-            coordination_without_rattlers: None,
-            sigma_yy: e(1.0),
-            shear_stress: e(0.3),
-            mean_stress: e(1.0),
-            granular_temperature: e(0.0),
-            sliding_fraction: e(0.1),
-            bridges_per_particle: e(0.0),
-            inertial_measured: inertial,
-            softness_measured: softness,
-            bond_measured: bond,
-        };
-        PointResult {
-            name: format!("{mu_p}-{inertial}-{softness}-{bond}"),
-            derived: spec.derive().expect("derived"),
-            spec,
-            steady_state: Some(ss),
-            wall_seconds: 0.0,
-            commit: String::new(),
-        }
+        let phi = law(mu_p).phi(inertial, softness, bond) * factor;
+        synthetic_result(
+            &format!(
+                "mu_p = {mu_p}\ninertial = {inertial}\nsoftness = {softness}\nbond = {bond}\n\
+                 cohesion = \"{}\"",
+                if bond > 0.0 { "reversible" } else { "none" }
+            ),
+            phi,
+            0.001,
+        )
     }
 
     /// Points on the law give back `g_c` of Eq. 15 and the collapse line exactly, also when

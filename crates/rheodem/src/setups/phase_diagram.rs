@@ -422,6 +422,73 @@ pub fn delta_phi_figures(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::setups::sweep::synthetic_result;
+
+    /// `Δφ` pairs each cohesive point with the cohesionless run of the same dynamics, `μ_p`,
+    /// size and polydispersity; of two runs of one point the longer counts; the standard
+    /// errors combine in quadrature; a point without a partner, or at another state, is
+    /// left out.
+    #[test]
+    fn delta_phi_pairs_each_point_with_its_cohesionless_partner() {
+        let at = |extra: &str, phi: f64, err: f64| {
+            synthetic_result(
+                &format!("inertial = 0.02\nsoftness = 0.01\n{extra}"),
+                phi,
+                err,
+            )
+        };
+        let wet = "cohesion = \"reversible\"\n";
+        let results = vec![
+            at("mu_p = 0.3", 0.620, 0.0003),
+            at(&format!("mu_p = 0.3\nbond = 2.0\n{wet}"), 0.610, 0.0004),
+            // A longer run of the same point: it counts, not the one above.
+            at(
+                &format!("mu_p = 0.3\nbond = 2.0\nstrain = 40.0\n{wet}"),
+                0.605,
+                0.0004,
+            ),
+            // Affine drag has its own partner.
+            at(
+                "mu_p = 0.3\nshear_dynamics = \"affine-drag\"",
+                0.630,
+                0.0003,
+            ),
+            at(
+                &format!("mu_p = 0.3\nbond = 2.0\nshear_dynamics = \"affine-drag\"\n{wet}"),
+                0.640,
+                0.0004,
+            ),
+            // No partner at μ_p = 0.5 (its reference has another size).
+            at(&format!("mu_p = 0.5\nbond = 1.0\n{wet}"), 0.6, 0.001),
+            at("mu_p = 0.5\nparticles = 2048", 0.6, 0.001),
+            // Another state.
+            synthetic_result(
+                &format!("mu_p = 0.3\nbond = 4.0\ninertial = 0.05\nsoftness = 0.01\n{wet}"),
+                0.5,
+                0.001,
+            ),
+        ];
+        let d = delta_phi_points(&results, 0.02, 0.01);
+        let lab: Vec<&DeltaPhi> = d
+            .iter()
+            .filter(|p| p.dynamics == ShearDynamics::Lab && p.mu_p == 0.3)
+            .collect();
+        assert_eq!(lab.len(), 2, "{d:?}");
+        assert_eq!((lab[0].bond, lab[0].value, lab[0].error), (0.0, 0.0, 0.0));
+        assert!((lab[1].value - (0.605 - 0.620)).abs() < 1e-12);
+        assert!((lab[1].error - 0.0005).abs() < 1e-12, "{}", lab[1].error);
+        let affine: Vec<&DeltaPhi> = d
+            .iter()
+            .filter(|p| p.dynamics == ShearDynamics::AffineDrag && p.bond > 0.0)
+            .collect();
+        assert_eq!(affine.len(), 1);
+        assert!((affine[0].value - 0.010).abs() < 1e-12);
+        assert!(
+            d.iter().all(|p| p.mu_p == 0.3 || p.bond == 0.0),
+            "the μ_p = 0.5 point has no partner: {d:?}"
+        );
+        assert!(d.iter().all(|p| p.bond != 4.0));
+    }
 
     /// A plane `v = x − 0.3 − 0.1 y` is reproduced exactly by bilinear interpolation, and
     /// its zero line is the straight line `x = 0.3 + 0.1 y`.

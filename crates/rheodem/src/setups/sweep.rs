@@ -452,3 +452,42 @@ pub fn default_out(path: &Path) -> PathBuf {
         .join("runs")
         .join(stem)
 }
+
+/// A finished point of the shear-box spec `spec` (TOML) whose steady state has the volume
+/// fraction `phi` ± `phi_err` (and plausible other values), for tests of what reads results.
+#[cfg(test)]
+pub(crate) fn synthetic_result(spec: &str, phi: f64, phi_err: f64) -> PointResult {
+    use crate::analysis::Estimate;
+    let spec: ShearBoxSpec = toml::from_str(spec).expect("spec");
+    let e = |mean, error| Estimate {
+        mean,
+        error,
+        samples: 100,
+    };
+    let ss = SteadyState {
+        steady: true,
+        note: String::new(),
+        strain_window: [spec.transient_strain, spec.strain],
+        volume_fraction: e(phi, phi_err),
+        friction: e(0.3, 0.001),
+        coordination: e(4.5, 0.01),
+        coordination_without_rattlers: None,
+        sigma_yy: e(1.0, 0.01),
+        shear_stress: e(0.3, 0.01),
+        mean_stress: e(1.0, 0.01),
+        granular_temperature: e(0.0, 0.0),
+        sliding_fraction: e(0.1, 0.01),
+        bridges_per_particle: e(0.0, 0.0),
+        inertial_measured: spec.inertial,
+        softness_measured: spec.softness,
+        bond_measured: spec.bond,
+    };
+    PointResult {
+        name: format!("{}-{}-{}", spec.mu_p, spec.bond, spec.strain),
+        derived: spec.derive().expect("derived"),
+        spec,
+        steady_state: Some(ss),
+        wall_seconds: 0.0,
+        commit: String::new(),
+    }
+}
