@@ -11,9 +11,6 @@
 use super::fields::FieldPoint;
 use super::grid::Grid;
 use crate::band::{ErfFit, fit_erf};
-use levenberg_marquardt::{LeastSquaresProblem, LevenbergMarquardt};
-use nalgebra::storage::Owned;
-use nalgebra::{DVector, Dyn, Matrix3, OMatrix, U3, Vector3};
 use serde::{Deserialize, Serialize};
 
 /// A Gaussian fit `γ̇(r) = A exp(−(r − R_c)² / 2σ²)` of a strain-rate profile.
@@ -221,60 +218,9 @@ pub fn fit_friction_line(points: &[RheologyPoint], p_min: f64) -> Option<LinearF
     })
 }
 
-/// The least-squares problem of [`fit_gauss`]: parameters `(A, R_c, ln σ)`.
-struct GaussProblem<'a> {
-    r: &'a [f64],
-    y: &'a [f64],
-    p: Vector3<f64>,
-}
-
-impl GaussProblem<'_> {
-    fn model(&self, i: usize) -> (f64, f64) {
-        let (a, c, s) = (self.p[0], self.p[1], self.p[2].exp());
-        let u = (self.r[i] - c) / s;
-        let g = (-0.5 * u * u).exp();
-        (a * g, u)
-    }
-}
-
-impl LeastSquaresProblem<f64, Dyn, U3> for GaussProblem<'_> {
-    type ResidualStorage = Owned<f64, Dyn>;
-    type JacobianStorage = Owned<f64, Dyn, U3>;
-    type ParameterStorage = Owned<f64, U3>;
-
-    fn set_params(&mut self, p: &Vector3<f64>) {
-        self.p.copy_from(p);
-    }
-
-    fn params(&self) -> Vector3<f64> {
-        self.p
-    }
-
-    fn residuals(&self) -> Option<DVector<f64>> {
-        Some(DVector::from_iterator(
-            self.r.len(),
-            (0..self.r.len()).map(|i| self.model(i).0 - self.y[i]),
-        ))
-    }
-
-    fn jacobian(&self) -> Option<OMatrix<f64, Dyn, U3>> {
-        let (a, s) = (self.p[0], self.p[2].exp());
-        Some(OMatrix::<f64, Dyn, U3>::from_fn(self.r.len(), |i, j| {
-            let (f, u) = self.model(i);
-            match j {
-                0 if a != 0.0 => f / a,
-                0 => (-0.5 * u * u).exp(),
-                // ∂f/∂R_c = f u/σ; ∂f/∂(ln σ) = f u².
-                1 => f * u / s,
-                _ => f * u * u,
-            }
-        }))
-    }
-}
-
-/// Fits `γ̇(r) = A exp(−(r − R_c)²/2σ²)` by Levenberg–Marquardt, starting from the largest
-/// point and the spread of the profile about it; standard errors from the covariance scaled
-/// by the residual variance.
+/// Fits `γ̇(r) = A exp(−(r − R_c)²/2σ²)` by Levenberg–Marquardt ([`crate::fit::least_squares`]),
+/// starting from the largest point and the spread of the profile about it; standard errors
+/// from the covariance scaled by the residual variance.
 ///
 /// # Errors
 /// A message with fewer than four points, non-finite data, or a fit that does not converge
@@ -301,31 +247,24 @@ pub fn fit_gauss(r: &[f64], rate: &[f64]) -> Result<GaussFit, String> {
         / total.max(f64::MIN_POSITIVE))
     .sqrt()
     .max(0.5 * (r[n - 1] - r[0]) / n as f64);
-    let problem = GaussProblem {
-        r,
-        y: rate,
-        p: Vector3::new(top, r[k], spread.ln()),
-    };
-    let (fit, report) = LevenbergMarquardt::new().minimize(problem);
-    let (a, c, s) = (fit.p[0], fit.p[1], fit.p[2].exp());
+    // Parameters (A, R_c, ln σ), so that the width stays positive; unit weights, so the
+    // standard errors are scaled by the residual variance.
+    let model = |p: &[f64], i: usize| p[0] * (-0.5 * ((r[i] - p[1]) / p[2].exp()).powi(2)).exp();
+    let fit = crate::fit::least_squares(model, rate, &vec![1.0; n], &[top, r[k], spread.ln()])
+        .map_err(|e| format!("the Gaussian fit failed: {e}"))?;
+    let (a, c, s) = (fit.params[0], fit.params[1], fit.params[2].exp());
     let (lo, hi) = (r[0].min(r[n - 1]), r[0].max(r[n - 1]));
-    if !(report.termination.was_successful() && a > 0.0 && c > lo && c < hi && s.is_finite()) {
+    if !(fit.converged && a > 0.0 && c > lo && c < hi && s.is_finite()) {
         return Err(format!(
-            "the Gaussian fit did not converge ({:?})",
-            report.termination
+            "the Gaussian fit did not converge (A = {a}, R_c = {c}, σ = {s})"
         ));
     }
-    let j = fit.jacobian().ok_or("no Jacobian")?;
-    let jtj: Matrix3<f64> = j.transpose() * &j;
-    let cov = jtj.try_inverse().ok_or("singular covariance")?;
-    let res = fit.residuals().ok_or("no residuals")?;
-    let s2 = res.norm_squared() / (n as f64 - 3.0).max(1.0);
     Ok(GaussFit {
         peak: a,
         centre: c,
-        centre_err: (cov[(1, 1)] * s2).sqrt(),
+        centre_err: fit.errors[1],
         sigma: s,
-        sigma_err: s * (cov[(2, 2)] * s2).sqrt(),
+        sigma_err: s * fit.errors[2],
         points: n,
     })
 }
