@@ -78,6 +78,21 @@ pub struct WetRun {
     pub torque: (f64, f64),
     /// `T_macro* = M (μ P_avg + c) / (f_g d_p)` (Eq. 26).
     pub torque_macro: f64,
+    /// Mean pressure of the fitted band points, `P_avg* = P_avg d_p²/f_g`.
+    pub pressure: f64,
+}
+
+impl WetRun {
+    /// The cohesion at a given friction `mu`: the band's line through its points' mean
+    /// `(P_avg, τ_avg)` with slope `mu`, `c* + (μ − mu) P_avg*`. Fixing `μ` across runs
+    /// takes out the trade-off of the two fitted coefficients; the standard error is the
+    /// free fit's, an upper bound.
+    pub fn cohesion_at(&self, mu: f64) -> (f64, f64) {
+        (
+            self.cohesion.0 + (self.mu.0 - mu) * self.pressure,
+            self.cohesion.1,
+        )
+    }
 }
 
 /// The parts of `summary.json` the study reads.
@@ -157,6 +172,7 @@ impl WetRun {
             cohesion_from_torque: band.cohesion_from_torque.unwrap_or(f64::NAN) * stress,
             torque: (torque.mean / (fg * d), torque.error / (fg * d)),
             torque_macro: band.torque_macro.unwrap_or(f64::NAN) / (fg * d),
+            pressure: band.pressure_avg * stress,
         })
     }
 }
@@ -324,6 +340,43 @@ pub fn wet_study(runs: &[WetRun]) -> Result<WetStudy, String> {
             eq_line.slope.0 / gamma
         );
         rupture_groups.push((gamma_s, gamma, line, members));
+    }
+    // The same at one friction for all runs (the dry run's at that Ω, g, else the papers'
+    // 0.15): the fitted μ falls with the volume, and c rises with it in the free fits.
+    let _ = writeln!(
+        md,
+        "\nWith `μ` fixed for every run of a group at the dry run's (same `Ω`, `g`; the \
+         papers' {} without one), `c*(μ) = c* + (μ_fit − μ) P_avg*`:\n\n\
+         | γ_s (N/m) | Ω, g | μ | volumes | c*₀ | a | max residual | p = a/γ* |\n\
+         |---|---|---|---|---|---|---|---|",
+        paper::MU
+    );
+    for (gamma_s, gamma, _, members) in &rupture_groups {
+        let og = members[0].omega_gravity;
+        let mu = runs
+            .iter()
+            .find(|r| r.adhesion == Adhesion::Dry && r.omega_gravity == og)
+            .map_or(paper::MU, |r| r.mu.0);
+        let pts: Vec<(f64, f64, f64)> = members
+            .iter()
+            .map(|r| {
+                let (c, e) = r.cohesion_at(mu);
+                (r.rupture, c, e)
+            })
+            .collect();
+        if let Some(line) = fit_line(&pts, false) {
+            let _ = writeln!(
+                md,
+                "| {gamma_s} | {}, {} | {mu:.4} | {} | {} | {} | {:.3} | {:.2} |",
+                og.0,
+                og.1,
+                line.points,
+                pm(line.intercept),
+                pm(line.slope),
+                line.max_residual,
+                line.slope.0 / gamma
+            );
+        }
     }
     if !rupture_groups.is_empty() {
         let top = runs.iter().map(|r| r.rupture).fold(0.0, f64::max) * 1.05;
@@ -553,7 +606,19 @@ mod tests {
             cohesion_from_torque: c,
             torque: (torque, 100.0),
             torque_macro: torque,
+            pressure: 11.0,
         }
+    }
+
+    /// At a fixed friction the band line pivots about its points' mean `(P_avg*, τ_avg*)`.
+    #[test]
+    fn the_cohesion_at_another_friction_keeps_the_mean_point() {
+        let mut r = run("r", 75.0, 0.02, 0.4, 6e5);
+        r.mu = (0.14, 0.002);
+        let tau = r.mu.0 * r.pressure + r.cohesion.0;
+        let (c, e) = r.cohesion_at(0.16);
+        assert!((0.16 * r.pressure + c - tau).abs() < 1e-12);
+        assert!((c - 0.18).abs() < 1e-12 && e == r.cohesion.1);
     }
 
     #[test]
@@ -599,6 +664,11 @@ mod tests {
         let md = &study.markdown;
         assert!(
             md.contains("| 0.02 | 0.5, 9.81 | 3 | 0.050 ± 0.000 | 0.980 ± 0.000 | 0.000 | 2.44 |"),
+            "{md}"
+        );
+        // With every μ at the papers' 0.15 (no dry run here), the fixed-μ fit is the same.
+        assert!(
+            md.contains("| 0.02 | 0.5, 9.81 | 0.1500 | 3 | 0.050 ± 0.000 | 0.980 ± 0.000 |"),
             "{md}"
         );
         // At 75 nl the 0.020 N/m run lies 3 % off Eq. 22 (c*₀ + a S_c* ≠ b γ* there).
