@@ -498,6 +498,9 @@ pub enum DbCommand {
         /// Only this study.
         #[arg(long)]
         study: Option<String>,
+        /// The split-bottom cells (table `cells`) instead of the shear-box points.
+        #[arg(long)]
+        cells: bool,
         /// Output file (default: standard output).
         #[arg(long, short)]
         out: Option<PathBuf>,
@@ -532,11 +535,21 @@ pub fn db(cmd: DbCommand) -> Result<()> {
                 running.len()
             );
         }
-        DbCommand::Export { db, study, out } => {
+        DbCommand::Export {
+            db,
+            study,
+            cells,
+            out,
+        } => {
             if !db.exists() {
                 bail!("{} does not exist", db.display());
             }
-            let csv = ResultsDb::open(&db)?.export_csv(study.as_deref())?;
+            let database = ResultsDb::open(&db)?;
+            let csv = if cells {
+                database.export_cells_csv(study.as_deref())?
+            } else {
+                database.export_csv(study.as_deref())?
+            };
             match out {
                 Some(f) => write_atomic(&f, csv.as_bytes())
                     .with_context(|| format!("cannot write {}", f.display()))?,
@@ -548,18 +561,18 @@ pub fn db(cmd: DbCommand) -> Result<()> {
                 bail!("{} does not exist", db.display());
             }
             let database = ResultsDb::open(&db)?;
-            let mut studies: Vec<String> = database
-                .results(None)?
-                .into_iter()
-                .map(|(s, _)| s)
-                .collect();
-            studies.dedup();
-            for s in &studies {
-                println!("{s}: {} points", database.count(Some(s))?);
+            for s in &database.studies()? {
+                let (points, cells) = (database.count(Some(s))?, database.count_cells(Some(s))?);
+                match (points, cells) {
+                    (p, 0) => println!("{s}: {p} points"),
+                    (0, c) => println!("{s}: {c} split-bottom cells"),
+                    (p, c) => println!("{s}: {p} points, {c} split-bottom cells"),
+                }
             }
             println!(
-                "total: {} points in {}",
+                "total: {} points and {} split-bottom cells in {}",
                 database.count(None)?,
+                database.count_cells(None)?,
                 db.display()
             );
         }

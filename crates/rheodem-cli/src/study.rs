@@ -490,7 +490,20 @@ fn run_cells(
                     }
                     let dir = s.out.join(name);
                     match pool.install(|| run_cell(name, spec, &dir, archive)) {
-                        Ok(()) => {}
+                        Ok(()) => {
+                            // Each finished cell goes into the study's database at once.
+                            let stored = s.database().map(|db| {
+                                ResultsDb::open(&db).and_then(|mut d| {
+                                    d.insert_cell(&s.name, name, &dir.join("summary.json"))
+                                })
+                            });
+                            if let Some(Err(e)) = stored {
+                                errors
+                                    .lock()
+                                    .map(|mut v| v.push(format!("{name}: {e}")))
+                                    .ok();
+                            }
+                        }
                         Err(RunError::Busy(_)) => {
                             if !quiet {
                                 eprintln!("  {name}: being run by another process; skipped");
@@ -519,15 +532,28 @@ fn run_cells(
 /// Stores every finished point in the study's database and refreshes its archive's table.
 fn collect(s: &Loaded) -> Result<()> {
     if let Points::SplitBottom(_) = s.points {
-        println!(
-            "{} of {} points finished; split-bottom points are kept as their summary.json{} \
-             (the results database holds shear-box points)",
-            s.finished_cells().len(),
-            s.names().len(),
-            s.archive
-                .as_ref()
-                .map_or(String::new(), |a| format!(", archived in {}", a.display()))
-        );
+        let cells = s.finished_cells();
+        match s.database() {
+            Some(db) => {
+                let mut database = ResultsDb::open(&db)?;
+                for (name, summary) in &cells {
+                    database.insert_cell(&s.name, name, summary)?;
+                }
+                println!(
+                    "{} of {} cells finished; {} stored under study {:?} in {}",
+                    cells.len(),
+                    s.names().len(),
+                    database.count_cells(Some(&s.name))?,
+                    s.name,
+                    db.display()
+                );
+            }
+            None => println!(
+                "{} of {} cells finished; the study names no database to store them in",
+                cells.len(),
+                s.names().len()
+            ),
+        }
         return Ok(());
     }
     let finished = s.finished();
@@ -733,12 +759,12 @@ fn status(s: &Loaded, list: bool) -> Result<()> {
         );
     }
     if let Some(db) = s.database().filter(|d| d.exists()) {
-        println!(
-            "  database {}: {} points of {}",
-            db.display(),
-            ResultsDb::open(&db)?.count(Some(&s.name))?,
-            s.name
-        );
+        let database = ResultsDb::open(&db)?;
+        let stored = match s.points {
+            Points::ShearBox(_) => database.count(Some(&s.name))?,
+            Points::SplitBottom(_) => database.count_cells(Some(&s.name))?,
+        };
+        println!("  database {}: {stored} points of {}", db.display(), s.name);
     }
     Ok(())
 }

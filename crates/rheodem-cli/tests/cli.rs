@@ -458,7 +458,8 @@ fn a_split_bottom_study_runs_and_reports() {
     std::fs::write(
         &file,
         "title = \"two small cells\"\nsetup = \"split-bottom\"\nout = \"runs/cells\"\n\
-         results = \"archive\"\n[base]\ninner_radius = 0.02\nouter_radius = 0.05\n\
+         results = \"archive\"\ndatabase = \"results.sqlite\"\n[base]\n\
+         inner_radius = 0.02\nouter_radius = 0.05\n\
          split_radius = 0.035\nheight = 0.012\nomega = 1.0\nduration = 0.08\n\
          average_from = 0.04\nrows = 16\nsnapshots = 1\ncheckpoints = 2\n\
          time_step = \"mean-pair\"\n[grid]\n\"cohesion.law\" = [\"dry\"]\n\
@@ -502,6 +503,20 @@ fn a_split_bottom_study_runs_and_reports() {
     assert!(md.contains("2 of 2 points finished"), "{md}");
     let out = rheodem(&["study", "run-point", &f, "--point", "dry-omega1-g9.81-s1"]);
     assert!(String::from_utf8_lossy(&out.stdout).contains("finished already"));
+    // Both cells went into the database as they finished; collect stores them again.
+    let db = dir.join("results.sqlite").to_string_lossy().into_owned();
+    let out = rheodem(&["db", "status", "--db", &db]);
+    assert!(
+        String::from_utf8_lossy(&out.stdout).contains("cells: 2 split-bottom cells"),
+        "{}",
+        String::from_utf8_lossy(&out.stdout)
+    );
+    let out = rheodem(&["study", "collect", &f]);
+    assert!(String::from_utf8_lossy(&out.stdout).contains("2 stored under study \"cells\""));
+    let out = rheodem(&["db", "export", "--db", &db, "--cells"]);
+    let csv = String::from_utf8_lossy(&out.stdout);
+    assert!(csv.starts_with("study,name,law,"), "{csv}");
+    assert_eq!(csv.lines().count(), 3, "{csv}");
     let _ = std::fs::remove_dir_all(&dir);
 }
 

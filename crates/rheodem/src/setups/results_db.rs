@@ -1,8 +1,10 @@
-//! The results database: every finished shear-box point of every study in one SQLite file
+//! The results database: every finished point of every study in one SQLite file
 //! (docs/studies.md), which many processes may write at once and anyone can query with
 //! `sqlite3`, Python or R.
 //!
-//! One table, `points`, with one row per `(study, name)`. A row holds the state point's
+//! Two tables: `points` for shear-box points and `cells` for split-bottom cells (schema
+//! version 2; a version-1 file gains the `cells` table when opened). In `points`, one row
+//! per `(study, name)`. A row holds the state point's
 //! controls, the steady-state averages with their standard errors, and the run's
 //! bookkeeping: wall time, commit, insertion time. It also keeps the full JSON of the
 //! point's spec and result, so nothing is lost when a column is missing. Writers open the file in
@@ -19,8 +21,8 @@ use std::time::Duration;
 /// How long a writer waits for another's transaction before giving up.
 const BUSY_TIMEOUT: Duration = Duration::from_secs(120);
 
-/// The schema version this code writes (`PRAGMA user_version`).
-const SCHEMA_VERSION: i64 = 1;
+/// The schema version this code writes (`PRAGMA user_version`): 1 had `points` only.
+const SCHEMA_VERSION: i64 = 2;
 
 /// The `points` table. Columns after `commit_id` are the JSON documents.
 const SCHEMA: &str = "
@@ -54,7 +56,64 @@ CREATE TABLE IF NOT EXISTS points (
     result_json TEXT NOT NULL,
     PRIMARY KEY (study, name)
 );
+CREATE TABLE IF NOT EXISTS cells (
+    study TEXT NOT NULL,
+    name TEXT NOT NULL,
+    law TEXT NOT NULL,
+    surface_tension REAL,
+    volume_nl REAL,
+    max_force REAL,
+    adhesive_stiffness REAL,
+    omega REAL NOT NULL,
+    gravity REAL NOT NULL,
+    mu_p REAL NOT NULL,
+    seed INTEGER NOT NULL,
+    duration REAL NOT NULL,
+    rupture_scaled REAL,
+    tension_scaled REAL,
+    mu REAL, mu_err REAL,
+    cohesion_scaled REAL, cohesion_scaled_err REAL,
+    cohesion_from_torque_scaled REAL,
+    torque_scaled REAL, torque_scaled_err REAL,
+    torque_macro_scaled REAL,
+    pressure_avg_scaled REAL,
+    wall_seconds REAL,
+    commit_id TEXT,
+    inserted_at TEXT NOT NULL DEFAULT (strftime('%Y-%m-%dT%H:%M:%SZ', 'now')),
+    summary_json TEXT NOT NULL,
+    PRIMARY KEY (study, name)
+);
 ";
+
+/// The columns of `cells` that `export_cells_csv` writes, in order.
+const CELL_COLUMNS: [&str; 26] = [
+    "study",
+    "name",
+    "law",
+    "surface_tension",
+    "volume_nl",
+    "max_force",
+    "adhesive_stiffness",
+    "omega",
+    "gravity",
+    "mu_p",
+    "seed",
+    "duration",
+    "rupture_scaled",
+    "tension_scaled",
+    "mu",
+    "mu_err",
+    "cohesion_scaled",
+    "cohesion_scaled_err",
+    "cohesion_from_torque_scaled",
+    "torque_scaled",
+    "torque_scaled_err",
+    "torque_macro_scaled",
+    "pressure_avg_scaled",
+    "wall_seconds",
+    "commit_id",
+    "inserted_at",
+];
 
 /// The columns `export_csv` writes, in order (the JSON documents are left out).
 const CSV_COLUMNS: [&str; 32] = [
@@ -242,6 +301,129 @@ impl ResultsDb {
         tx.commit().map_err(err)
     }
 
+    /// Stores the finished split-bottom cell `name` under `study` from its `summary.json`
+    /// (a run's, or its archived copy), replacing an earlier row of the same name. The
+    /// band's numbers, in the scaled units of `setups::wet_study`, are empty where the run
+    /// has no band rheology.
+    pub fn insert_cell(&mut self, study: &str, name: &str, summary: &Path) -> Result<(), DbError> {
+        use super::split_bottom::{Cohesion, SplitBottomSpec};
+        #[derive(serde::Deserialize)]
+        struct Recorded {
+            spec: SplitBottomSpec,
+            #[serde(default)]
+            wall_seconds: Option<f64>,
+            #[serde(default)]
+            commit: Option<String>,
+        }
+        let corrupt = |reason: String| DbError::Corrupt {
+            path: self.path.clone(),
+            name: name.into(),
+            reason,
+        };
+        let text = std::fs::read_to_string(summary)
+            .map_err(|e| corrupt(format!("cannot read {}: {e}", summary.display())))?;
+        let rec: Recorded = serde_json::from_str(&text).map_err(|e| {
+            corrupt(format!(
+                "{} is not a split-bottom summary: {e}",
+                summary.display()
+            ))
+        })?;
+        let run = super::wet_study::WetRun::read_summary(summary, name).ok();
+        let (law, tension, volume, force, stiffness) = match rec.spec.cohesion {
+            Cohesion::Dry => ("dry", None, None, None, None),
+            Cohesion::Willett {
+                surface_tension,
+                volume,
+                ..
+            } => (
+                "willett",
+                Some(surface_tension),
+                Some(volume * 1e12),
+                None,
+                None,
+            ),
+            Cohesion::Linear {
+                max_force,
+                stiffness,
+            } => ("linear", None, None, Some(max_force), Some(stiffness)),
+        };
+        let r = run.as_ref();
+        let s = &rec.spec;
+        let path = self.path.clone();
+        let err = move |source| DbError::Sqlite {
+            path: path.clone(),
+            source,
+        };
+        let tx = self
+            .connection
+            .transaction_with_behavior(TransactionBehavior::Immediate)
+            .map_err(&err)?;
+        tx.execute(
+            "INSERT OR REPLACE INTO cells (study, name, law, surface_tension, volume_nl,
+                max_force, adhesive_stiffness, omega, gravity, mu_p, seed, duration,
+                rupture_scaled, tension_scaled, mu, mu_err, cohesion_scaled,
+                cohesion_scaled_err, cohesion_from_torque_scaled, torque_scaled,
+                torque_scaled_err, torque_macro_scaled, pressure_avg_scaled, wall_seconds,
+                commit_id, summary_json)
+             VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12, ?13, ?14, ?15, ?16,
+                ?17, ?18, ?19, ?20, ?21, ?22, ?23, ?24, ?25, ?26)",
+            params![
+                study,
+                name,
+                law,
+                tension,
+                volume,
+                force,
+                stiffness,
+                s.omega,
+                s.gravity,
+                s.friction,
+                s.seed as i64,
+                s.duration,
+                r.map(|r| r.rupture),
+                r.map(|r| r.tension),
+                r.map(|r| r.mu.0),
+                r.map(|r| r.mu.1),
+                r.map(|r| r.cohesion.0),
+                r.map(|r| r.cohesion.1),
+                r.map(|r| r.cohesion_from_torque),
+                r.map(|r| r.torque.0),
+                r.map(|r| r.torque.1),
+                r.map(|r| r.torque_macro),
+                r.map(|r| r.pressure),
+                rec.wall_seconds,
+                rec.commit,
+                text,
+            ],
+        )
+        .map_err(&err)?;
+        tx.commit().map_err(err)
+    }
+
+    /// Number of stored split-bottom cells of `study` (of every study with `None`).
+    pub fn count_cells(&self, study: Option<&str>) -> Result<u64, DbError> {
+        self.connection
+            .query_row(
+                "SELECT count(*) FROM cells WHERE ?1 IS NULL OR study = ?1",
+                params![study],
+                |r| r.get::<_, i64>(0),
+            )
+            .map(|n| n as u64)
+            .map_err(self.err())
+    }
+
+    /// The studies with stored points or cells, in name order.
+    pub fn studies(&self) -> Result<Vec<String>, DbError> {
+        let mut q = self
+            .connection
+            .prepare("SELECT study FROM points UNION SELECT study FROM cells ORDER BY study")
+            .map_err(self.err())?;
+        let rows = q
+            .query_map([], |r| r.get::<_, String>(0))
+            .map_err(self.err())?;
+        rows.collect::<Result<Vec<_>, _>>().map_err(self.err())
+    }
+
     /// The stored result of point `name` in `study`, if any.
     pub fn get(&self, study: &str, name: &str) -> Result<Option<PointResult>, DbError> {
         let json: Option<String> = self
@@ -309,15 +491,31 @@ impl ResultsDb {
     /// The table of `study` (every study with `None`) as CSV: the columns of the `points`
     /// table without the JSON documents, empty fields for missing values.
     pub fn export_csv(&self, study: Option<&str>) -> Result<String, DbError> {
+        self.table_csv("points", &CSV_COLUMNS, study)
+    }
+
+    /// The split-bottom cells of `study` (every study with `None`) as CSV: the columns of
+    /// the `cells` table without the summary document.
+    pub fn export_cells_csv(&self, study: Option<&str>) -> Result<String, DbError> {
+        self.table_csv("cells", &CELL_COLUMNS, study)
+    }
+
+    /// The `columns` of `table`'s rows of `study` as CSV.
+    fn table_csv(
+        &self,
+        table: &str,
+        columns: &[&str],
+        study: Option<&str>,
+    ) -> Result<String, DbError> {
         let sql = format!(
-            "SELECT {} FROM points WHERE ?1 IS NULL OR study = ?1 ORDER BY study, name",
-            CSV_COLUMNS.join(", ")
+            "SELECT {} FROM {table} WHERE ?1 IS NULL OR study = ?1 ORDER BY study, name",
+            columns.join(", ")
         );
         let mut q = self.connection.prepare(&sql).map_err(self.err())?;
         let mut rows = q.query(params![study]).map_err(self.err())?;
-        let mut s = CSV_COLUMNS.join(",") + "\n";
+        let mut s = columns.join(",") + "\n";
         while let Some(row) = rows.next().map_err(self.err())? {
-            for k in 0..CSV_COLUMNS.len() {
+            for k in 0..columns.len() {
                 if k > 0 {
                     s.push(',');
                 }
@@ -408,6 +606,34 @@ mod tests {
         // Reopening keeps everything.
         let db = ResultsDb::open(&file).expect("reopens");
         assert_eq!(db.count(None).expect("count"), 3);
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    /// A committed split-bottom summary goes into `cells` with its scaled band numbers;
+    /// storing it again replaces the row; the CSV export lists it; a file that is not a
+    /// summary is refused by name.
+    #[test]
+    fn split_bottom_cells_are_stored_from_their_summaries() {
+        let dir = temp("cells");
+        let mut db = ResultsDb::open(&dir.join("results.sqlite")).expect("open");
+        let summary = Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("../../validation/runs-split-bottom-fields/wet-g0.02-v75/summary.json");
+        db.insert_cell("wet", "v75", &summary).expect("insert");
+        db.insert_cell("wet", "v75", &summary).expect("replace");
+        assert_eq!(db.count_cells(Some("wet")).expect("count"), 1);
+        assert_eq!(db.count(None).expect("count"), 0, "no shear-box point");
+        assert_eq!(db.studies().expect("studies"), ["wet"]);
+        let csv = db.export_cells_csv(None).expect("csv");
+        let row = csv.lines().nth(1).expect("a row");
+        assert!(row.starts_with("wet,v75,willett,0.02,75"), "{row}");
+        let cohesion: f64 = row.split(',').nth(16).expect("c*").parse().expect("number");
+        assert!((cohesion - 0.403).abs() < 0.001, "{row}");
+        let not_summary = Path::new(env!("CARGO_MANIFEST_DIR")).join("Cargo.toml");
+        let e = db
+            .insert_cell("wet", "x", &not_summary)
+            .expect_err("not json");
+        assert!(e.to_string().contains("Cargo.toml"), "{e}");
+        drop(db);
         let _ = std::fs::remove_dir_all(&dir);
     }
 
