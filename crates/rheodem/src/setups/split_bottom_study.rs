@@ -6,7 +6,9 @@
 //! `[[point]]`); dotted keys set fields of the `cohesion` table:
 //!
 //! ```toml
+//! title = "Cohesion against bridge volume"
 //! setup = "split-bottom"
+//! out = "runs/volumes"
 //! [base]
 //! cohesion = { law = "willett", surface_tension = 0.02, volume = 75e-12 }
 //! [grid]
