@@ -199,6 +199,39 @@ pub(crate) fn worker_count(flag: &str, n: usize) -> Result<usize> {
     Ok(n)
 }
 
+/// Runs `work(k, pool)` for every `k` in `0..n`, `jobs` at a time on worker threads, each
+/// with its own one-thread rayon pool (so that every point runs as on one core); returns
+/// the errors of pools that could not be built.
+pub(crate) fn for_each_point(
+    n: usize,
+    jobs: usize,
+    work: impl Fn(usize, &rayon::ThreadPool) + Sync,
+) -> Vec<String> {
+    let next = std::sync::atomic::AtomicUsize::new(0);
+    let errors = std::sync::Mutex::new(Vec::new());
+    std::thread::scope(|scope| {
+        for _ in 0..jobs.min(n) {
+            scope.spawn(|| {
+                let pool = match rayon::ThreadPoolBuilder::new().num_threads(1).build() {
+                    Ok(p) => p,
+                    Err(e) => {
+                        errors.lock().map(|mut v| v.push(e.to_string())).ok();
+                        return;
+                    }
+                };
+                loop {
+                    let k = next.fetch_add(1, std::sync::atomic::Ordering::SeqCst);
+                    if k >= n {
+                        break;
+                    }
+                    work(k, &pool);
+                }
+            });
+        }
+    });
+    errors.into_inner().unwrap_or_default()
+}
+
 /// A thread pool of `threads` workers (default: all logical CPUs), checked as `--threads`.
 pub(crate) fn pool(threads: Option<usize>) -> Result<(rayon::ThreadPool, usize)> {
     let n = worker_count("--threads", threads.unwrap_or_else(cpus))?;

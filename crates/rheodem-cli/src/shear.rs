@@ -14,7 +14,6 @@ use rheodem::setups::sweep::{
 };
 use std::path::{Path, PathBuf};
 use std::sync::Mutex;
-use std::sync::atomic::{AtomicUsize, Ordering};
 
 /// Arguments of `shear-box`: every option overrides the same key of `--config`.
 #[derive(Args)]
@@ -271,91 +270,75 @@ pub(crate) fn run_sweep(
     );
     // Every finished point also goes into the results database, under the study's name.
     let database = db.map(ResultsDb::open).transpose()?.map(Mutex::new);
-    let next = AtomicUsize::new(0);
     let results: Mutex<Vec<Option<PointResult>>> = Mutex::new(vec![None; points.len()]);
     let errors: Mutex<Vec<String>> = Mutex::new(Vec::new());
     let busy: Mutex<Vec<String>> = Mutex::new(Vec::new());
     let table = out.join("results.csv");
-    std::thread::scope(|s| {
-        for _ in 0..jobs.min(points.len()) {
-            s.spawn(|| {
-                let pool = match rayon::ThreadPoolBuilder::new().num_threads(1).build() {
-                    Ok(p) => p,
-                    Err(e) => {
-                        errors.lock().map(|mut v| v.push(e.to_string())).ok();
-                        return;
+    let pool_errors = crate::for_each_point(points.len(), jobs, |k, pool| {
+        let (name, point) = &points[k];
+        let dir = out.join(name);
+        let mut last = 0u64;
+        let kept = archive.as_deref().and_then(|a| archived(a, name, point));
+        let fresh = kept.is_none();
+        let outcome = match kept {
+            Some(r) => Ok(r),
+            None => pool.install(|| {
+                run_point(name, point, &dir, 1, &mut |done, total| {
+                    let pct = done * 100 / total.max(1);
+                    if !quiet && pct >= last + 10 {
+                        last = pct;
+                        eprintln!("  {name}: {pct} %");
                     }
-                };
-                loop {
-                    let k = next.fetch_add(1, Ordering::SeqCst);
-                    let Some((name, point)) = points.get(k) else {
-                        break;
-                    };
-                    let dir = out.join(name);
-                    let mut last = 0u64;
-                    let kept = archive.as_deref().and_then(|a| archived(a, name, point));
-                    let fresh = kept.is_none();
-                    let outcome = match kept {
-                        Some(r) => Ok(r),
-                        None => pool.install(|| {
-                            run_point(name, point, &dir, 1, &mut |done, total| {
-                                let pct = done * 100 / total.max(1);
-                                if !quiet && pct >= last + 10 {
-                                    last = pct;
-                                    eprintln!("  {name}: {pct} %");
-                                }
-                            })
-                        }),
-                    };
-                    match outcome {
-                        Ok(r) => {
-                            if !quiet {
-                                report(&r, &dir);
-                            }
-                            // One worker at a time writes the tables and the archive.
-                            let Ok(mut all) = results.lock() else {
-                                break;
-                            };
-                            let archived = match (&archive, fresh) {
-                                (Some(a), true) => archive_point(a, &r).map_err(Into::into),
-                                _ => Ok(()),
-                            };
-                            let stored = match &database {
-                                Some(d) => d
-                                    .lock()
-                                    .map_err(|_| anyhow::anyhow!("database lock poisoned"))
-                                    .and_then(|mut d| Ok(d.insert(study, &r)?)),
-                                None => Ok(()),
-                            };
-                            all[k] = Some(r);
-                            let done: Vec<PointResult> = all.iter().flatten().cloned().collect();
-                            let written = write_atomic(&table, results_csv(&done).as_bytes())
-                                .with_context(|| format!("cannot write {}", table.display()));
-                            drop(all);
-                            if let Err(e) = archived.and(written).and(stored) {
-                                errors
-                                    .lock()
-                                    .map(|mut v| v.push(format!("{name}: {e:#}")))
-                                    .ok();
-                            }
-                        }
-                        Err(RunError::Busy(_)) => {
-                            if !quiet {
-                                eprintln!("  {name}: being run by another process; skipped");
-                            }
-                            busy.lock().map(|mut v| v.push(name.clone())).ok();
-                        }
-                        Err(e) => {
-                            errors
-                                .lock()
-                                .map(|mut v| v.push(format!("{name}: {e:#}")))
-                                .ok();
-                        }
-                    }
+                })
+            }),
+        };
+        match outcome {
+            Ok(r) => {
+                if !quiet {
+                    report(&r, &dir);
                 }
-            });
+                // One worker at a time writes the tables and the archive.
+                let Ok(mut all) = results.lock() else {
+                    return;
+                };
+                let archived = match (&archive, fresh) {
+                    (Some(a), true) => archive_point(a, &r).map_err(Into::into),
+                    _ => Ok(()),
+                };
+                let stored = match &database {
+                    Some(d) => d
+                        .lock()
+                        .map_err(|_| anyhow::anyhow!("database lock poisoned"))
+                        .and_then(|mut d| Ok(d.insert(study, &r)?)),
+                    None => Ok(()),
+                };
+                all[k] = Some(r);
+                let done: Vec<PointResult> = all.iter().flatten().cloned().collect();
+                let written = write_atomic(&table, results_csv(&done).as_bytes())
+                    .with_context(|| format!("cannot write {}", table.display()));
+                drop(all);
+                if let Err(e) = archived.and(written).and(stored) {
+                    errors
+                        .lock()
+                        .map(|mut v| v.push(format!("{name}: {e:#}")))
+                        .ok();
+                }
+            }
+            Err(RunError::Busy(_)) => {
+                if !quiet {
+                    eprintln!("  {name}: being run by another process; skipped");
+                }
+                busy.lock().map(|mut v| v.push(name.clone())).ok();
+            }
+            Err(e) => {
+                errors
+                    .lock()
+                    .map(|mut v| v.push(format!("{name}: {e:#}")))
+                    .ok();
+            }
         }
     });
+    errors.lock().map(|mut v| v.extend(pool_errors)).ok();
     let mut errors = errors.into_inner().unwrap_or_default();
     // The archive's table lists every point archived there, whichever sweep ran it; it is
     // rewritten only when it differs (e.g. after another sweep file added points).

@@ -465,61 +465,42 @@ fn run_cells(
         points.len(),
         s.out.display()
     );
-    let next = std::sync::atomic::AtomicUsize::new(0);
     let errors = std::sync::Mutex::new(Vec::new());
-    std::thread::scope(|scope| {
-        for _ in 0..jobs.min(points.len()) {
-            scope.spawn(|| {
-                let pool = match rayon::ThreadPoolBuilder::new().num_threads(1).build() {
-                    Ok(p) => p,
-                    Err(e) => {
-                        errors.lock().map(|mut v| v.push(e.to_string())).ok();
-                        return;
-                    }
-                };
-                loop {
-                    let k = next.fetch_add(1, std::sync::atomic::Ordering::SeqCst);
-                    let Some((name, spec)) = points.get(k) else {
-                        break;
-                    };
-                    let archive = s.archive.as_deref();
-                    if archive
-                        .is_some_and(|a| split_bottom_study::archived(a, name, spec).is_some())
-                    {
-                        continue;
-                    }
-                    let dir = s.out.join(name);
-                    match pool.install(|| run_cell(name, spec, &dir, archive)) {
-                        Ok(()) => {
-                            // Each finished cell goes into the study's database at once.
-                            let stored = s.database().map(|db| {
-                                ResultsDb::open(&db).and_then(|mut d| {
-                                    d.insert_cell(&s.name, name, &dir.join("summary.json"))
-                                })
-                            });
-                            if let Some(Err(e)) = stored {
-                                errors
-                                    .lock()
-                                    .map(|mut v| v.push(format!("{name}: {e}")))
-                                    .ok();
-                            }
-                        }
-                        Err(RunError::Busy(_)) => {
-                            if !quiet {
-                                eprintln!("  {name}: being run by another process; skipped");
-                            }
-                        }
-                        Err(e) => {
-                            errors
-                                .lock()
-                                .map(|mut v| v.push(format!("{name}: {e}")))
-                                .ok();
-                        }
-                    }
+    let pool_errors = crate::for_each_point(points.len(), jobs, |k, pool| {
+        let (name, spec) = &points[k];
+        let archive = s.archive.as_deref();
+        if archive.is_some_and(|a| split_bottom_study::archived(a, name, spec).is_some()) {
+            return;
+        }
+        let dir = s.out.join(name);
+        match pool.install(|| run_cell(name, spec, &dir, archive)) {
+            Ok(()) => {
+                // Each finished cell goes into the study's database at once.
+                let stored = s.database().map(|db| {
+                    ResultsDb::open(&db)
+                        .and_then(|mut d| d.insert_cell(&s.name, name, &dir.join("summary.json")))
+                });
+                if let Some(Err(e)) = stored {
+                    errors
+                        .lock()
+                        .map(|mut v| v.push(format!("{name}: {e}")))
+                        .ok();
                 }
-            });
+            }
+            Err(RunError::Busy(_)) => {
+                if !quiet {
+                    eprintln!("  {name}: being run by another process; skipped");
+                }
+            }
+            Err(e) => {
+                errors
+                    .lock()
+                    .map(|mut v| v.push(format!("{name}: {e}")))
+                    .ok();
+            }
         }
     });
+    errors.lock().map(|mut v| v.extend(pool_errors)).ok();
     let done = s.finished_cells().len();
     println!("{done} of {} points finished", points.len());
     let errors = errors.into_inner().unwrap_or_default();
