@@ -420,11 +420,12 @@ fn run(cli: Cli) -> Result<()> {
                     let total = r.loop_time.as_secs_f64();
                     let pct = |d: std::time::Duration| 100.0 * d.as_secs_f64() / total;
                     println!(
-                        "{name}, threads {n}: {} particles × {} steps in {:.3} s — neighbours {:.1} % ({} rebuilds, {:.1} pairs/particle), forces {:.1} %, integration {:.1} %; P = {:.1}, Z = {:.2}",
+                        "{name}, threads {n}: {} particles × {} steps in {:.3} s — neighbours {:.1} % (rebuilds {:.1} %: {}, {:.1} pairs/particle), forces {:.1} %, integration {:.1} %; P = {:.1}, Z = {:.2}",
                         r.particles,
                         r.steps,
                         total,
                         pct(r.neighbor_time),
+                        pct(r.rebuild_time),
                         r.rebuilds,
                         r.pairs_per_particle,
                         pct(r.force_time),

@@ -15,7 +15,9 @@
 
 use crate::contact::kernel::{Springs, Touch};
 use crate::contact::lanes::{F4, Real, V3};
-use crate::contact::{ContactHistory, ContactTable, PairForce, PairKernel, PairKinematics};
+use crate::contact::{
+    ContactHistory, ContactTable, HistoryView, PairForce, PairKernel, PairKinematics,
+};
 use crate::domain::{IDENTITY_IMAGE, IMAGE_COUNT, ImageTransform};
 use crate::neighbor::NeighborList;
 use crate::observe::{ContactObserver, ContactView};
@@ -115,7 +117,7 @@ pub fn pair_forces<O: ContactObserver>(
         let (lo, hi) = (bounds[c], bounds[c + 1]);
         let pairs = (inputs.offsets[hi] - inputs.offsets[lo]) as usize;
         let (t_here, t_rest) = std::mem::take(&mut active).split_at_mut(pairs);
-        let (h_here, h_rest) = std::mem::take(&mut history).split_at_mut(pairs);
+        let (h_here, h_rest) = std::mem::take(&mut history).split_at(pairs);
         active = t_rest;
         history = h_rest;
         let (Some(f), Some(t)) = (force_bufs.next(), torque_bufs.next()) else {
@@ -127,10 +129,10 @@ pub fn pair_forces<O: ContactObserver>(
 
     let partial: Vec<O> = jobs
         .into_par_iter()
-        .map(|((range, active, history, force, torque), found)| {
+        .map(|((range, active, mut history, force, torque), found)| {
             force[range.start..].fill(DVec3::ZERO);
             torque[range.start..].fill(DVec3::ZERO);
-            chunk_forces::<O>(&inputs, range, active, history, force, torque, found)
+            chunk_forces::<O>(&inputs, range, active, &mut history, force, torque, found)
         })
         .collect();
 
@@ -186,7 +188,7 @@ fn chunk_forces<O: ContactObserver>(
     inp: &Inputs<'_>,
     range: std::ops::Range<usize>,
     active: &mut [bool],
-    history: &mut [ContactHistory],
+    history: &mut HistoryView<'_>,
     force: &mut [DVec3],
     torque: &mut [DVec3],
     found: &mut Found,
@@ -208,7 +210,7 @@ fn chunk_forces_avx2<O: ContactObserver>(
     inp: &Inputs<'_>,
     range: std::ops::Range<usize>,
     active: &mut [bool],
-    history: &mut [ContactHistory],
+    history: &mut HistoryView<'_>,
     force: &mut [DVec3],
     torque: &mut [DVec3],
     found: &mut Found,
@@ -221,7 +223,7 @@ fn chunk_forces_generic<O: ContactObserver>(
     inp: &Inputs<'_>,
     range: std::ops::Range<usize>,
     active: &mut [bool],
-    history: &mut [ContactHistory],
+    history: &mut HistoryView<'_>,
     force: &mut [DVec3],
     torque: &mut [DVec3],
     found: &mut Found,
@@ -251,7 +253,7 @@ fn chunk_forces_generic<O: ContactObserver>(
             if d2 >= reach * reach {
                 if active[local] {
                     active[local] = false;
-                    history[local] = ContactHistory::default();
+                    history.clear(local);
                 }
                 continue;
             }
@@ -266,12 +268,12 @@ fn chunk_forces_generic<O: ContactObserver>(
             };
             if sum - dist >= 0.0 {
                 touching.push(pair);
-            } else if history[local].bridge || !inp.kernel_of(&pair).needs_bridge() {
+            } else if history.bridge[local] || !inp.kernel_of(&pair).needs_bridge() {
                 apart.push(pair);
             } else if active[local] {
                 // Apart without a bridge under an irreversible law: no force.
                 active[local] = false;
-                history[local] = ContactHistory::default();
+                history.clear(local);
             }
         }
     }
@@ -413,7 +415,7 @@ fn apart_batch<O: ContactObserver>(
     kernel: &PairKernel,
     batch: &[Touching],
     active: &mut [bool],
-    history: &mut [ContactHistory],
+    history: &mut HistoryView<'_>,
     force: &mut [DVec3],
     torque: &mut [DVec3],
     obs: &mut O,
@@ -430,18 +432,18 @@ fn apart_batch<O: ContactObserver>(
         radius_i.0[l] = inp.radius[i];
         radius_j.0[l] = inp.radius[j];
         sum.0[l] = inp.radius[i] + inp.radius[j];
-        *bridged = history[c.local as usize].bridge;
+        *bridged = history.bridge[c.local as usize];
     }
     let normal = branch.scale(F4::splat(1.0) / dist);
     let separation = -(sum - dist);
     let (f_a, alive) = kernel.apart_lanes::<F4, false>(separation, radius_i, radius_j, bridge);
     for (l, c) in batch.iter().enumerate() {
         let (i, j, local) = (c.i as usize, c.j as usize, c.local as usize);
-        let h = &mut history[local];
-        *h = ContactHistory {
+        let h = ContactHistory {
             bridge: alive[l],
             ..ContactHistory::default()
         };
+        history.set(local, &h);
         let f = f_a.0[l];
         if f == 0.0 {
             active[local] = false;
@@ -466,7 +468,7 @@ fn apart_batch<O: ContactObserver>(
                 kinematics: &inp.kinematics(i, j, c.code, c.branch, c.dist),
                 force: &pf,
                 law: inp.laws.get(inp.species[i], inp.species[j]),
-                history: h,
+                history: &h,
             });
         }
     }
@@ -481,7 +483,7 @@ fn touch_batch<O: ContactObserver>(
     kernel: &PairKernel,
     batch: &[Touching],
     active: &mut [bool],
-    history: &mut [ContactHistory],
+    history: &mut HistoryView<'_>,
     force: &mut [DVec3],
     torque: &mut [DVec3],
     obs: &mut O,
@@ -506,11 +508,11 @@ fn touch_batch<O: ContactObserver>(
         pair.omega_i.set_lane(l, inp.omega[i]);
         pair.omega_j.set_lane(l, w_j);
         inv_mass.0[l] = inp.inv_mass[i] + inp.inv_mass[j];
-        let h = &history[c.local as usize];
-        springs.tangential.set_lane(l, h.tangential);
+        let local = c.local as usize;
+        springs.tangential.set_lane(l, history.tangential[local]);
         if rotation {
-            springs.rolling.set_lane(l, h.rolling);
-            springs.torsion.set_lane(l, h.torsion);
+            springs.rolling.set_lane(l, history.rolling[local]);
+            springs.torsion.set_lane(l, history.torsion[local]);
         }
     }
     let one = F4::splat(1.0);
@@ -520,14 +522,13 @@ fn touch_batch<O: ContactObserver>(
     let f = kernel.touching_lanes::<F4, false>(&pair, &mut springs, inp.dt);
     for (l, c) in batch.iter().enumerate() {
         let (i, j, local) = (c.i as usize, c.j as usize, c.local as usize);
-        let h = &mut history[local];
-        h.tangential = springs.tangential.lane(l);
+        history.tangential[local] = springs.tangential.lane(l);
         if rotation {
-            h.rolling = springs.rolling.lane(l);
-            h.torsion = springs.torsion.lane(l);
+            history.rolling[local] = springs.rolling.lane(l);
+            history.torsion[local] = springs.torsion.lane(l);
         }
         if kernel.needs_bridge() {
-            h.bridge = true;
+            history.bridge[local] = true;
         }
         active[local] = true;
         let pf = PairForce {
@@ -561,7 +562,7 @@ fn touch_batch<O: ContactObserver>(
                 kinematics: &kin,
                 force: &pf,
                 law: inp.laws.get(inp.species[i], inp.species[j]),
-                history: h,
+                history: &history.get(local),
             });
         }
     }

@@ -2,9 +2,11 @@
 //!
 //! The list is a *half* list in compressed-row form: for each particle slot `i`, the
 //! partners `j > i` within `a_i + a_j + range + skin`, each with the image code of `j`
-//! (see [`crate::domain`]). Contact history lives beside the pairs and is keyed by the
-//! particles' permanent ids when the list is rebuilt, so it survives rebuilds and the
-//! re-sorting of particles by cell that every rebuild performs for memory locality.
+//! (see [`crate::domain`]). Contact history lives beside the pairs, one slot per pair
+//! ([`HistorySlots`]). A rebuild re-sorts the particles by cell for memory locality and
+//! carries every live history over to the pair's new slot: the old list's pairs are
+//! renamed through the sort's permutation and gathered into short rows by their new
+//! lower slot, which the new list then reads in order (no hashing, no search).
 //!
 //! A rebuild is due when two particles could have closed the skin since the last build.
 //! Displacements are measured relative to the box's affine motion since the build (the
@@ -16,13 +18,12 @@
 //! steady shear this rebuilds far less often than lab-frame displacement, which counts the
 //! mean flow itself.
 
-use crate::contact::ContactHistory;
+use crate::contact::{ContactHistory, HistorySlots, HistoryView};
 use crate::domain::{Domain, IDENTITY_IMAGE, IMAGE_COUNT, ImageTransform, image_code};
 use crate::integrate::PARTICLES_PER_TASK;
 use crate::particles::{Motion, Particles};
 use glam::{DMat3, DVec3};
 use rayon::prelude::*;
-use rustc_hash::FxHashMap;
 use serde::{Deserialize, Serialize};
 
 /// Errors of the neighbour search.
@@ -81,7 +82,7 @@ pub struct NeighborList {
     partner: Vec<u32>,
     image: Vec<u8>,
     active: Vec<bool>,
-    history: Vec<ContactHistory>,
+    history: HistorySlots,
     reference_position: Vec<DVec3>,
     reference_deformation: DMat3,
     reference_epoch: u64,
@@ -89,6 +90,9 @@ pub struct NeighborList {
     interaction_cutoff: f64,
     #[serde(skip)]
     last_rotations: Vec<(u32, DMat3)>,
+    /// Buffers of the history carried over the last rebuild, reused by the next.
+    #[serde(skip)]
+    carried: CarriedHistory,
     /// Number of builds so far.
     pub builds: u64,
 }
@@ -104,7 +108,7 @@ pub struct PairSlices<'a> {
     /// Whether each pair carries live history (in contact or attracting).
     pub active: &'a mut [bool],
     /// Contact history of each pair.
-    pub history: &'a mut [ContactHistory],
+    pub history: HistoryView<'a>,
 }
 
 impl NeighborList {
@@ -134,7 +138,7 @@ impl NeighborList {
             partner: &self.partner,
             image: &self.image,
             active: &mut self.active,
-            history: &mut self.history,
+            history: self.history.view(),
         }
     }
 
@@ -153,15 +157,8 @@ impl NeighborList {
         // The two largest non-affine displacements (squared); max is order-independent, so
         // the parallel reduction is deterministic.
         let lo = self.reference_lo;
-        let top2 = |a: (f64, f64), d: f64| {
-            if d > a.0 {
-                (d, a.0)
-            } else if d > a.1 {
-                (a.0, d)
-            } else {
-                a
-            }
-        };
+        // Branch-free: the larger of the two and the larger of the rest.
+        let top2 = |(a0, a1): (f64, f64), d: f64| (a0.max(d), a1.max(a0.min(d)));
         let (first, second) = particles
             .position
             .par_iter()
@@ -177,8 +174,8 @@ impl NeighborList {
     }
 
     /// Rebuilds the list: wraps positions into the region, re-sorts particles by cell, finds
-    /// all pairs within cutoff and carries the contact history over by particle ids and the
-    /// pair's wedge image. Particles appended since the last build (insertion) start
+    /// all pairs within cutoff and carries the contact history over by the particles and
+    /// the pair's wedge image. Particles appended since the last build (insertion) start
     /// without history; every other pair keeps its springs and bridges.
     pub fn build(
         &mut self,
@@ -215,7 +212,6 @@ impl NeighborList {
             rotated.push((id, m));
         }
         self.last_rotations = rotated;
-        let old = self.history_by_key(particles, domain, &images, &turns);
 
         let a_max = particles.radius.iter().copied().fold(0.0, f64::max);
         let cutoff = 2.0 * a_max + self.range + self.skin;
@@ -254,46 +250,39 @@ impl NeighborList {
             fill[c as usize] += 1;
         }
         particles.permute(&order);
+        let carried = self.carry_history(particles, domain, &images, &turns, &order);
 
         self.find_pairs(particles, &grid, &start, domain);
 
-        self.active = vec![false; self.partner.len()];
-        self.history = vec![ContactHistory::default(); self.partner.len()];
-        if !old.is_empty() {
-            let (offsets, partner, image, ids) =
-                (&self.offsets, &self.partner, &self.image, &particles.id);
-            let restored: Vec<Vec<(usize, ContactHistory)>> =
-                (0..particles.len().div_ceil(BUILD_BLOCK))
-                    .into_par_iter()
-                    .map(|b| {
-                        let mut found = Vec::new();
-                        for i in b * BUILD_BLOCK..((b + 1) * BUILD_BLOCK).min(particles.len()) {
-                            let id_i = ids[i];
-                            for k in offsets[i] as usize..offsets[i + 1] as usize {
-                                let id_j = ids[partner[k] as usize];
-                                let c = domain.image_turns(image[k]);
-                                let h = if id_i < id_j {
-                                    old.get(&(id_i, id_j, c)).copied()
-                                } else {
-                                    // Kept in j's frame for the order (j, i): flip the order
-                                    // and rotate into i's frame, where j is seen through
-                                    // this pair's image.
-                                    old.get(&(id_j, id_i, -c))
-                                        .map(|h| h.flipped().rotated(&images[image[k] as usize]))
-                                };
-                                if let Some(h) = h {
-                                    found.push((k, h));
-                                }
-                            }
-                        }
-                        found
-                    })
-                    .collect();
-            for (k, h) in restored.into_iter().flatten() {
-                self.active[k] = true;
-                self.history[k] = h;
-            }
+        // Every pair of the new list takes its carried history, or none; rows of blocks
+        // of particles are written in parallel into their own stretch of the list.
+        self.active.resize(self.partner.len(), false);
+        self.history.resize(self.partner.len());
+        let blocks = particles.len().div_ceil(BUILD_BLOCK);
+        let mut jobs = Vec::with_capacity(blocks);
+        let (mut active, mut history) = (&mut self.active[..], self.history.view());
+        for b in 0..blocks {
+            let rows = b * BUILD_BLOCK..((b + 1) * BUILD_BLOCK).min(particles.len());
+            let pairs = (self.offsets[rows.end] - self.offsets[rows.start]) as usize;
+            let (a_here, a_rest) = std::mem::take(&mut active).split_at_mut(pairs);
+            let (h_here, h_rest) = std::mem::take(&mut history).split_at(pairs);
+            (active, history) = (a_rest, h_rest);
+            jobs.push((rows, a_here, h_here));
         }
+        let (offsets, partner, image) = (&self.offsets, &self.partner, &self.image);
+        jobs.into_par_iter()
+            .for_each(|(rows, active, mut history)| {
+                let base = offsets[rows.start] as usize;
+                for i in rows {
+                    for k in offsets[i] as usize..offsets[i + 1] as usize {
+                        let turns = domain.image_turns(image[k]);
+                        let h = carried.get(i as u32, partner[k], turns);
+                        active[k - base] = h.is_some();
+                        history.set(k - base, &h.unwrap_or_default());
+                    }
+                }
+            });
+        self.carried = carried;
 
         self.reference_position = particles.position.clone();
         self.reference_deformation = domain.deformation;
@@ -310,55 +299,67 @@ impl NeighborList {
         &self.last_rotations
     }
 
-    /// Live contact histories of the list as it stood before this build, keyed by
-    /// `(lower id, higher id, wedge turns of the higher seen from the lower)` and expressed
-    /// in the lower particle's frame after this build's wraps (`turns[id]` multiples of
-    /// `Φ`, the particle rotated by `−turns·Φ`). Under translations only, the key's turns
-    /// are zero and histories are not transformed: a box of at least three cutoffs per
-    /// periodic axis sees each pair through one image only.
-    fn history_by_key(
-        &self,
+    /// Live contact histories of the list as it stood before this build (whose slot `s`
+    /// is now slot `new_slot[s]`, `order` listing the old slot of each new one), keyed by
+    /// `(lower new slot, higher new slot, wedge turns of the higher seen from the lower)`
+    /// and expressed in the lower particle's frame after this build's wraps (`turns[id]`
+    /// multiples of `Φ`, the particle rotated by `−turns·Φ`). Under translations only, the
+    /// key's turns are zero and histories are not transformed: a box of at least three
+    /// cutoffs per periodic axis sees each pair through one image only. The buffers of the
+    /// previous carry are reused.
+    fn carry_history(
+        &mut self,
         particles: &Particles,
         domain: &Domain,
         images: &[ImageTransform; IMAGE_COUNT],
         turns: &[i32],
-    ) -> FxHashMap<(u32, u32, i32), ContactHistory> {
-        let mut map = FxHashMap::default();
+        order: &[u32],
+    ) -> CarriedHistory {
+        let mut carried = std::mem::take(&mut self.carried);
+        carried.clear(particles.len());
+        let mut new_slot = vec![0u32; order.len()];
+        for (slot, &old) in order.iter().enumerate() {
+            new_slot[old as usize] = slot as u32;
+        }
         // Rows exist for the particles present at the last build; particles appended since
-        // (insertion) sit in the slots after them and have no history yet.
+        // (insertion) sat in the slots after them and have no history yet.
         let rows = self.offsets.len().saturating_sub(1).min(particles.len());
-        let turn = |id: u32| turns[id as usize];
-        let into_frame = |h: ContactHistory, id: u32| match domain.wedge {
-            Some(w) if turn(id) != 0 => h.rotated(&ImageTransform {
-                rotation: Some(w.rotation(-turn(id))),
+        let turn = |slot: u32| turns[particles.id[slot as usize] as usize];
+        let into_frame = |h: ContactHistory, slot: u32| match domain.wedge {
+            Some(w) if turn(slot) != 0 => h.rotated(&ImageTransform {
+                rotation: Some(w.rotation(-turn(slot))),
                 ..ImageTransform::IDENTITY
             }),
             _ => h,
         };
-        for i in 0..rows {
-            let id_i = particles.id[i];
-            for k in self.offsets[i] as usize..self.offsets[i + 1] as usize {
-                if !self.active[k] {
-                    continue;
-                }
-                let id_j = particles.id[self.partner[k] as usize];
-                let h = self.history[k];
-                let c = domain.image_turns(self.image[k]);
-                // j's image `R(cΦ) r_j` lies next to `r_i`; after the wraps `r_i → R(−t_i Φ) r_i`,
-                // `r_j → R(−t_j Φ) r_j` it is `R((c − t_i + t_j) Φ) r_j`: the key's turns are
-                // `c − t_i + t_j` (the signs of `t` were once reversed, which lost the
-                // history of every pair whose particle wrapped through a face).
-                if id_i < id_j {
-                    let key = (id_i, id_j, c - turn(id_i) + turn(id_j));
-                    map.insert(key, into_frame(h, id_i));
-                } else {
-                    let seen_from_j = h.rotated_back(&images[self.image[k] as usize]).flipped();
-                    let key = (id_j, id_i, -c - turn(id_j) + turn(id_i));
-                    map.insert(key, into_frame(seen_from_j, id_j));
-                }
+        let (offsets, active, partner) = (&self.offsets, &self.active, &self.partner);
+        let new_slot = &new_slot;
+        let live = || {
+            (0..rows).flat_map(move |i| {
+                (offsets[i] as usize..offsets[i + 1] as usize)
+                    .filter(move |&k| active[k])
+                    .map(move |k| (new_slot[i], new_slot[partner[k] as usize], k))
+            })
+        };
+        for (a, b, _) in live() {
+            carried.count(a.min(b));
+        }
+        carried.start_filling();
+        for (a, b, k) in live() {
+            let h = self.history.get(k);
+            let c = domain.image_turns(self.image[k]);
+            // b's image `R(cΦ) r_b` lies next to `r_a`; after the wraps `r_a → R(−t_a Φ) r_a`,
+            // `r_b → R(−t_b Φ) r_b` it is `R((c − t_a + t_b) Φ) r_b`: the key's turns are
+            // `c − t_a + t_b` (the signs of `t` were once reversed, which lost the
+            // history of every pair whose particle wrapped through a face).
+            if a < b {
+                carried.fill(a, b, c - turn(a) + turn(b), into_frame(h, a));
+            } else {
+                let seen_from_b = h.rotated_back(&images[self.image[k] as usize]).flipped();
+                carried.fill(b, a, -c - turn(b) + turn(a), into_frame(seen_from_b, b));
             }
         }
-        map
+        carried
     }
 
     /// Finds every pair within cutoff, rows in blocks of particles searched in parallel and
@@ -381,31 +382,29 @@ impl NeighborList {
         let rotated = domain.rotated_images();
         let images = domain.image_transforms();
         let wedge = domain.wedge;
-        let row_of = |i: usize, row: &mut Vec<(u32, u8)>| {
+        let row_of = |i: usize, row: &mut Vec<(u32, u8)>, stencil: &mut Stencil| {
             row.clear();
             let ci = grid.cell_coords(pos[i]);
-            for dz in -1..=1 {
-                for dy in -1..=1 {
-                    for dx in -1..=1 {
-                        let Some((cell, img)) = grid.neighbor(pos[i], ci, [dx, dy, dz]) else {
-                            continue;
-                        };
-                        // The domain's transform of this image (a translation here).
-                        let code = image_code(img);
-                        let shift = images[code as usize].shift;
-                        let (lo, hi) = (start[cell] as usize, start[cell + 1] as usize);
-                        for j in lo.max(i + 1)..hi.max(i + 1) {
-                            if !free[i] && !free[j] {
-                                continue;
-                            }
-                            let cut = rad[i] + rad[j] + reach;
-                            let d = pos[i] - (pos[j] + shift);
-                            if d.length_squared() < cut * cut {
-                                row.push((j as u32, code));
-                            }
-                        }
-                    }
+            stencil.update(grid, start, ci, pos[i]);
+            let (r_i, a_i, free_i) = (pos[i], rad[i], free[i]);
+            for &(lo, hi, code) in stencil.ranges(grid, start, ci, r_i) {
+                // The domain's transform of this image (a translation here).
+                let shift = images[code as usize].shift;
+                let (lo, hi) = (lo.max(i as u32 + 1) as usize, hi as usize);
+                if lo >= hi {
+                    continue;
                 }
+                // Branch-free: every candidate is written, the length advances only for
+                // those within reach.
+                let mut len = row.len();
+                row.resize(len + hi - lo, (0, 0));
+                for j in lo..hi {
+                    let cut = a_i + rad[j] + reach;
+                    let d = r_i - (pos[j] + shift);
+                    row[len] = (j as u32, code);
+                    len += usize::from(d.length_squared() < cut * cut && (free_i || free[j]));
+                }
+                row.truncate(len);
             }
             // Wedge images: j seen at R r_j is within reach of r_i where R⁻¹ r_i is within
             // reach of r_j; only query positions within a cutoff of the wedge can find one.
@@ -445,8 +444,9 @@ impl NeighborList {
             .map(|b| {
                 let (mut lens, mut partner, mut image) = (Vec::new(), Vec::new(), Vec::new());
                 let mut row = Vec::new();
+                let mut stencil = Stencil::default();
                 for i in b * BUILD_BLOCK..((b + 1) * BUILD_BLOCK).min(n) {
-                    row_of(i, &mut row);
+                    row_of(i, &mut row, &mut stencil);
                     lens.push(row.len() as u32);
                     partner.extend(row.iter().map(|p| p.0));
                     image.extend(row.iter().map(|p| p.1));
@@ -521,6 +521,148 @@ impl NeighborList {
             }
         }
         count
+    }
+}
+
+/// The live contact histories of a list, carried over a rebuild: rows by the lower
+/// particle slot of the new list (compressed), each entry the higher slot, the wedge turns
+/// of the pair and the history in the lower particle's frame. A lookup scans one row, a few entries long;
+/// unlike a hash map, filling and reading it walk memory in order.
+#[derive(Clone, Debug, Default)]
+struct CarriedHistory {
+    /// Row starts by lower slot (`slots + 2` entries, see
+    /// [`CarriedHistory::start_filling`]).
+    start: Vec<u32>,
+    /// Higher slot and wedge turns of each entry.
+    key: Vec<(u32, i32)>,
+    /// History of each entry.
+    history: Vec<ContactHistory>,
+}
+
+impl CarriedHistory {
+    /// Empties the rows, for particle slots below `slots`.
+    fn clear(&mut self, slots: usize) {
+        self.start.clear();
+        self.start.resize(slots + 2, 0);
+        self.key.clear();
+        self.history.clear();
+    }
+
+    /// Counts one entry in the row of `lower`.
+    fn count(&mut self, lower: u32) {
+        self.start[lower as usize + 2] += 1;
+    }
+
+    /// Turns the counts into row starts (shifted by one: `start[id + 1]` is where the
+    /// next entry of row `id` goes), ready for [`CarriedHistory::fill`].
+    fn start_filling(&mut self) {
+        for id in 2..self.start.len() {
+            self.start[id] += self.start[id - 1];
+        }
+        let total = self.start[self.start.len() - 1] as usize;
+        self.key.resize(total, (0, 0));
+        self.history.resize(total, ContactHistory::default());
+    }
+
+    /// Places an entry in the row of `lower`; once all are placed, `start[id]` is the
+    /// start of row `id`.
+    fn fill(&mut self, lower: u32, higher: u32, turns: i32, history: ContactHistory) {
+        let slot = &mut self.start[lower as usize + 1];
+        self.key[*slot as usize] = (higher, turns);
+        self.history[*slot as usize] = history;
+        *slot += 1;
+    }
+
+    /// The history of the pair `(lower, higher)` through `turns`, if it was live.
+    fn get(&self, lower: u32, higher: u32, turns: i32) -> Option<ContactHistory> {
+        let row = self.start.get(lower as usize..lower as usize + 2)?;
+        (row[0] as usize..row[1] as usize)
+            .find(|&e| self.key[e] == (higher, turns))
+            .map(|e| self.history[e])
+    }
+}
+
+/// The 27 cells around one cell as ranges of particle slots, found once for all the
+/// particles in it (they sit in consecutive slots after the sort by cell). Cells next to
+/// each other along `x`, seen through the same image, are one range of slots.
+#[derive(Debug)]
+struct Stencil {
+    /// The cell the ranges are for (`[-1; 3]` before the first).
+    cell: [i64; 3],
+    /// Slot ranges `lo..hi` and the image code they are seen through.
+    fixed: Vec<(u32, u32, u8)>,
+    /// Offsets of the cells across the periodic `y` faces, found per particle
+    /// ([`CellGrid::neighbor`]): under Lees-Edwards shear their `x` depends on the
+    /// particle's position.
+    across_y: Vec<[i32; 3]>,
+    /// `fixed` followed by the ranges across `y` of the current particle.
+    ranges: Vec<(u32, u32, u8)>,
+}
+
+impl Default for Stencil {
+    fn default() -> Stencil {
+        Stencil {
+            cell: [-1; 3],
+            fixed: Vec::with_capacity(27),
+            across_y: Vec::with_capacity(27),
+            ranges: Vec::with_capacity(27),
+        }
+    }
+}
+
+/// Appends the slots of `cell` seen through `code` to `ranges`, extending the last range
+/// when the cell follows it in memory.
+fn push_cell(ranges: &mut Vec<(u32, u32, u8)>, start: &[u32], cell: usize, code: u8) {
+    let (lo, hi) = (start[cell], start[cell + 1]);
+    match ranges.last_mut() {
+        Some(last) if last.1 == lo && last.2 == code => last.1 = hi,
+        _ => ranges.push((lo, hi, code)),
+    }
+}
+
+impl Stencil {
+    /// Makes the fixed ranges those of cell `c` (holding position `r`), unless they
+    /// already are.
+    fn update(&mut self, grid: &CellGrid, start: &[u32], c: [i64; 3], r: DVec3) {
+        if c == self.cell {
+            return;
+        }
+        self.cell = c;
+        self.fixed.clear();
+        self.across_y.clear();
+        for dz in -1..=1 {
+            for dy in -1..=1 {
+                for dx in -1..=1 {
+                    let y = c[1] + dy as i64;
+                    if grid.periodic[1] && (y < 0 || y >= grid.dims[1] as i64) {
+                        self.across_y.push([dx, dy, dz]);
+                    } else if let Some((cell, img)) = grid.neighbor(r, c, [dx, dy, dz]) {
+                        push_cell(&mut self.fixed, start, cell, image_code(img));
+                    }
+                }
+            }
+        }
+    }
+
+    /// All the ranges of a particle at `r` in cell `c` (after [`Stencil::update`]).
+    fn ranges(
+        &mut self,
+        grid: &CellGrid,
+        start: &[u32],
+        c: [i64; 3],
+        r: DVec3,
+    ) -> &[(u32, u32, u8)] {
+        if self.across_y.is_empty() {
+            return &self.fixed;
+        }
+        self.ranges.clear();
+        self.ranges.extend_from_slice(&self.fixed);
+        for &d in &self.across_y {
+            if let Some((cell, img)) = grid.neighbor(r, c, d) {
+                push_cell(&mut self.ranges, start, cell, image_code(img));
+            }
+        }
+        &self.ranges
     }
 }
 

@@ -338,7 +338,7 @@ fn pair_across_a_face_is_the_same_pair_rotated_inside() {
         .active
         .iter()
         .zip(slices.history.iter())
-        .find_map(|(a, h)| a.then_some(*h))
+        .find_map(|(a, h)| a.then_some(h))
         .expect("live contact");
     assert!(h.tangential.length() > 0.0 && h.rolling.length() > 0.0);
 }
@@ -864,8 +864,8 @@ fn live_history(sim: &mut Simulation) -> (usize, usize) {
             let j = s.partner[k] as usize;
             let r_j = images[s.image[k] as usize].position(p.position[j]);
             let gap = (p.position[i] - r_j).length() - p.radius[i] - p.radius[j];
-            springs += usize::from(s.history[k].tangential.length() > 0.0);
-            open += usize::from(gap > 0.0 && s.history[k].bridge);
+            springs += usize::from(s.history.get(k).tangential.length() > 0.0);
+            open += usize::from(gap > 0.0 && s.history.get(k).bridge);
         }
     }
     (springs, open)

@@ -17,6 +17,7 @@ pub mod friction;
 pub mod kernel;
 pub mod lanes;
 pub mod normal;
+pub mod slots;
 
 use crate::domain::ImageTransform;
 use glam::DVec3;
@@ -26,6 +27,7 @@ pub use adhesion::Adhesion;
 pub use friction::Resistance;
 pub use kernel::PairKernel;
 pub use normal::{Damping, NormalLaw};
+pub use slots::{HistorySlots, HistoryView};
 
 /// The full contact law of one species pair.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
