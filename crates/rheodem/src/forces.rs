@@ -19,6 +19,7 @@ use crate::contact::{
     ContactHistory, ContactTable, HistoryView, PairForce, PairKernel, PairKinematics,
 };
 use crate::domain::{IDENTITY_IMAGE, IMAGE_COUNT, ImageTransform};
+use crate::integrate::PARTICLES_PER_TASK;
 use crate::neighbor::NeighborList;
 use crate::observe::{ContactObserver, ContactView};
 use crate::particles::Particles;
@@ -137,18 +138,18 @@ pub fn pair_forces<O: ContactObserver>(
         .collect();
 
     if chunks > 1 {
-        let extra_f = &scratch.force;
-        let extra_t = &scratch.torque;
-        particles
-            .force
+        // Chunk `c` wrote only the slots from `bounds[c]` on: nothing to add before
+        // `bounds[1]`.
+        let (extra_f, extra_t, first) = (&scratch.force, &scratch.torque, bounds[1]);
+        particles.force[first..]
             .par_iter_mut()
-            .zip(particles.torque.par_iter_mut())
+            .zip(particles.torque[first..].par_iter_mut())
             .enumerate()
-            .with_min_len(1024)
-            .for_each(|(i, (f, t))| {
-                // Chunk `c` wrote only the slots from `bounds[c]` on.
-                for ((bf, bt), &first) in extra_f.iter().zip(extra_t).zip(&bounds[1..]) {
-                    if i >= first {
+            .with_min_len(PARTICLES_PER_TASK)
+            .for_each(|(k, (f, t))| {
+                let i = first + k;
+                for ((bf, bt), &start) in extra_f.iter().zip(extra_t).zip(&bounds[1..]) {
+                    if i >= start {
                         *f += bf[i];
                         *t += bt[i];
                     }

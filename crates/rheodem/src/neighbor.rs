@@ -163,7 +163,7 @@ impl NeighborList {
             .position
             .par_iter()
             .zip(self.reference_position.par_iter())
-            .with_min_len(1024)
+            .with_min_len(PARTICLES_PER_TASK)
             .fold(
                 || (0.0f64, 0.0f64),
                 |acc, (r, r0)| top2(acc, (*r - *r0 - affine * (*r0 - lo)).length_squared()),
