@@ -25,6 +25,12 @@ pub enum FitError {
         /// Parameters fitted.
         params: usize,
     },
+    /// No point of the kind a closed-form estimate needs lies inside the fit range.
+    #[error("no {what} point inside the fit range")]
+    NoPointInRange {
+        /// The kind of point needed.
+        what: &'static str,
+    },
     /// The data and their standard errors differ in length.
     #[error("{values} values but {sigmas} standard errors")]
     LengthMismatch {

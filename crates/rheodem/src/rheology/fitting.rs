@@ -122,14 +122,65 @@ pub fn fit_phi_law(points: &[MeasuredPoint], range: &FitRange) -> Result<Coeffic
     })
 }
 
-/// `p₁ … p₄` of `g_c` (Eq. 15) from every point in `range` (cohesive and not), with
-/// `φ_0, I_φ, p*_φ` held at `base`.
+/// The volume-fraction law at `mu_p` for a sweep too narrow in `(I, p*)` to fit Eq. 13 (a
+/// phase diagram at one `I` and `p*`): `I_φ` and `p*_φ` held at Table 3's row nearest to
+/// `mu_p`, and `φ_0` the error-weighted mean of `φ / ((1 − I/I_φ)(1 + p*/p*_φ))` over the
+/// cohesionless points in `range`, so that the law passes through them. An error if no
+/// cohesionless point is in range.
+pub fn anchor_phi_0(
+    points: &[MeasuredPoint],
+    range: &FitRange,
+    mu_p: f64,
+) -> Result<AnchoredPhiLaw, FitError> {
+    let held = nearest(phi_laws(), mu_p, |l| l.mu_p);
+    let (mut sum_w, mut sum_wx) = (0.0, 0.0);
+    for p in selected(points, range, false) {
+        let shape = (1.0 - p.inertial / held.i_phi) * (1.0 + p.softness / held.p_phi);
+        let sigma = p.phi.1.max(SIGMA_FLOOR) / shape;
+        let w = 1.0 / (sigma * sigma);
+        sum_w += w;
+        sum_wx += w * p.phi.0 / shape;
+    }
+    if sum_w == 0.0 {
+        return Err(FitError::NoPointInRange {
+            what: "cohesionless (Bo = 0)",
+        });
+    }
+    Ok(AnchoredPhiLaw {
+        law: PhiLaw {
+            mu_p,
+            phi_0: sum_wx / sum_w,
+            gc: [0.0; 4],
+            ..held
+        },
+        phi_0_error: sum_w.powf(-0.5),
+        table_mu_p: held.mu_p,
+    })
+}
+
+/// Eq. 13 anchored at the cohesionless points ([`anchor_phi_0`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct AnchoredPhiLaw {
+    /// The law: `φ_0` estimated, `I_φ` and `p*_φ` from Table 3, `g_c = 1`.
+    pub law: PhiLaw,
+    /// Standard error of `φ_0`.
+    pub phi_0_error: f64,
+    /// The `μ_p` of the Table 3 row that `I_φ` and `p*_φ` come from.
+    pub table_mu_p: f64,
+}
+
+/// `p₁ … p₄` of `g_c` (Eq. 15) from the cohesive points in `range`, with `φ_0, I_φ, p*_φ`
+/// held at `base` (a point at `Bo = 0` has `g_c = 1` whatever `p₁ … p₄` are, so it says
+/// nothing about them and does not count towards the points the fit needs).
 pub fn fit_cohesion_factor(
     points: &[MeasuredPoint],
     range: &FitRange,
     base: &PhiLaw,
 ) -> Result<CoefficientFit, FitError> {
-    let pts = selected(points, range, true);
+    let pts: Vec<&MeasuredPoint> = selected(points, range, true)
+        .into_iter()
+        .filter(|p| p.bond > 0.0)
+        .collect();
     let y: Vec<f64> = pts.iter().map(|p| p.phi.0).collect();
     let s: Vec<f64> = pts.iter().map(|p| p.phi.1.max(SIGMA_FLOOR)).collect();
     let model = |q: &[f64], i: usize| {
@@ -239,7 +290,7 @@ pub fn fit_friction_dependence(mu_p: &[f64], q: &[f64], sigma: &[f64]) -> Result
 }
 
 /// `value ± error` with as many decimals as the error's first two significant digits need.
-fn with_error(value: f64, error: f64) -> String {
+pub fn with_error(value: f64, error: f64) -> String {
     let decimals = if error > 0.0 && error.is_finite() {
         (1.0 - error.log10().floor()).clamp(1.0, 8.0) as usize
     } else {
@@ -402,6 +453,41 @@ mod tests {
             table.contains("| 0.3 | Shi et al. 2020 | 0.61 | 5.166 | 0.283 |"),
             "{table}"
         );
+    }
+
+    /// A phase-diagram column (one `I`, `p*`; `Bo` = 0 … 5): `φ_0` anchored at the `Bo = 0`
+    /// point and `g_c` fitted over the rest recover the law the data were made with.
+    #[test]
+    fn one_state_point_column_recovers_phi_0_and_g_c() {
+        let truth = PhiLaw::for_mu_p(0.3).expect("tabulated");
+        let mut rng = rand_xoshiro::Xoshiro256PlusPlus::seed_from_u64(11);
+        let noise = Normal::new(0.0, 3e-4).expect("σ");
+        let pts: Vec<MeasuredPoint> = (0..=10)
+            .map(|k| {
+                let bo = 0.5 * k as f64;
+                MeasuredPoint {
+                    mu_p: 0.3,
+                    inertial: 0.02,
+                    softness: 0.01,
+                    bond: bo,
+                    phi: (truth.phi(0.02, 0.01, bo) + noise.sample(&mut rng), 3e-4),
+                    mu: (0.4, 3e-3),
+                }
+            })
+            .collect();
+        assert!(fit_phi_law(&pts, &FitRange::PHI).is_err(), "one (I, p*)");
+        let anchored = anchor_phi_0(&pts, &FitRange::PHI, 0.3).expect("a Bo = 0 point");
+        assert_eq!(anchored.table_mu_p, 0.3);
+        let (v, e) = (anchored.law.phi_0, anchored.phi_0_error);
+        assert!((v - truth.phi_0).abs() < 3.0 * e, "{v} ± {e}");
+        let gc = fit_cohesion_factor(&pts, &FitRange::PHI, &anchored.law).expect("g_c");
+        assert_eq!(gc.fit.points, 10, "the Bo = 0 point does not count");
+        for (k, t) in truth.gc.iter().enumerate() {
+            let (v, e) = (gc.fit.params[k], gc.fit.errors[k]);
+            assert!((v - t).abs() < 3.0 * e, "{}: {v} ± {e} vs {t}", gc.names[k]);
+        }
+        let none = anchor_phi_0(&pts[1..], &FitRange::PHI, 0.3).expect_err("no Bo = 0");
+        assert!(none.to_string().contains("cohesionless"), "{none}");
     }
 
     #[test]

@@ -5,9 +5,9 @@
 use super::sweep::PointResult;
 use crate::domain::ShearDynamics;
 use crate::rheology::fitting::{
-    CoefficientFit, FitRange, MeasuredPoint, coefficient_table, fit_cohesion_factor,
+    CoefficientFit, FitRange, MeasuredPoint, anchor_phi_0, coefficient_table, fit_cohesion_factor,
     fit_friction_dependence, fit_mu_cohesion, fit_mu_law, fit_phi_law, paper_table3, paper_table5,
-    paper_table7, paper_table7_cohesion,
+    paper_table7, paper_table7_cohesion, with_error,
 };
 use crate::rheology::{CohesionFactor, MuLaw, PhiLaw, SetUp, friction_dependences};
 use std::fmt::Write;
@@ -46,6 +46,8 @@ struct GroupFits {
     gc: Option<CoefficientFit>,
     mu: Option<CoefficientFit>,
     mu_cohesion: Option<CoefficientFit>,
+    /// Values a fit held because the points could not determine them, one line each.
+    held: Vec<String>,
     /// Why a fit was not made, one line per fit.
     notes: Vec<String>,
 }
@@ -59,22 +61,44 @@ fn fit_group(mu_p: f64, points: &[MeasuredPoint]) -> GroupFits {
             None
         }
     };
-    let phi = keep("φ_0, I_φ, p*_φ", fit_phi_law(points, &FitRange::PHI));
+    let phi_fit = fit_phi_law(points, &FitRange::PHI);
     let cohesive = points.iter().filter(|p| p.bond > 0.0).count();
-    let gc = match (&phi, cohesive) {
-        (Some(f), c) if c > 0 => {
-            let base = PhiLaw {
-                mu_p,
-                phi_0: f.fit.params[0],
-                i_phi: f.fit.params[1],
-                p_phi: f.fit.params[2],
-                gc: [0.0; 4],
-            };
-            keep(
-                "p₁ … p₄",
-                fit_cohesion_factor(points, &FitRange::PHI, &base),
-            )
-        }
+    let mut held = Vec::new();
+    // The law g_c multiplies: the fitted Eq. 13 where the points determine it, otherwise
+    // (a sweep at one I and p*, as the phase diagram) anchored at the Bo = 0 point.
+    let base = match &phi_fit {
+        Ok(f) => Some(Ok(PhiLaw {
+            mu_p,
+            phi_0: f.fit.params[0],
+            i_phi: f.fit.params[1],
+            p_phi: f.fit.params[2],
+            gc: [0.0; 4],
+        })),
+        Err(_) if cohesive > 0 => match anchor_phi_0(points, &FitRange::PHI, mu_p) {
+            Ok(anchored) => {
+                let law = anchored.law;
+                held.push(format!(
+                    "μ_p = {mu_p}: too few (I, p*) to fit Eq. 13, so g_c multiplies φ_0 = {} \
+                     through the Bo = 0 point(s), with I_φ = {} and p*_φ = {} held at Table 3's \
+                     row for μ_p = {}",
+                    with_error(law.phi_0, anchored.phi_0_error),
+                    law.i_phi,
+                    law.p_phi,
+                    anchored.table_mu_p
+                ));
+                Some(Ok(law))
+            }
+            Err(e) => Some(Err(e)),
+        },
+        Err(_) => None,
+    };
+    let phi = keep("φ_0, I_φ, p*_φ", phi_fit);
+    let gc = match base {
+        Some(Ok(base)) if cohesive > 0 => keep(
+            "p₁ … p₄",
+            fit_cohesion_factor(points, &FitRange::PHI, &base),
+        ),
+        Some(Err(e)) => keep("p₁ … p₄", Err(e)),
         _ => None,
     };
     let mu = keep("μ_0, μ_∞, I_μ, p*_μ", fit_mu_law(points, &FitRange::MU));
@@ -99,6 +123,7 @@ fn fit_group(mu_p: f64, points: &[MeasuredPoint]) -> GroupFits {
         gc,
         mu,
         mu_cohesion,
+        held,
         notes,
     }
 }
@@ -167,6 +192,14 @@ pub fn fit_tables(results: &[PointResult]) -> String {
         s += "\n";
         if phi.len() >= 3 {
             s += &table8(&phi, &label);
+            s += "\n";
+        }
+        let held: Vec<&String> = fits.iter().flat_map(|(_, f)| &f.held).collect();
+        if !held.is_empty() {
+            let _ = writeln!(s, "Held:");
+            for h in held {
+                let _ = writeln!(s, "- {h}");
+            }
             s += "\n";
         }
         let notes: Vec<&String> = fits.iter().flat_map(|(_, f)| &f.notes).collect();

@@ -220,7 +220,8 @@ fn figure_links(figures: &[Figure]) -> String {
 
 /// Builds the report of `study` from its finished points: status, the validation table
 /// against the laws of Shi et al. 2020, the fitted coefficients beside the paper's
-/// (Tables 3, 5, 7, 8), and the `Δφ` figures.
+/// (Tables 3, 5, 7, 8), the regimes of the phase diagram where the study has `Δφ` points
+/// at the report's `(I, p*)`, and the `Δφ` figures.
 pub fn report(
     study: &StudySpec,
     variant: &str,
@@ -233,8 +234,13 @@ pub fn report(
     let _ = writeln!(md, "\n## Fitted coefficients\n");
     md += &fit_tables(finished);
     let (i, p) = (study.report.inertial, study.report.softness);
+    let delta_phi = delta_phi_points(finished, i, p);
+    if delta_phi.iter().any(|d| d.bond > 0.0) {
+        let _ = writeln!(md, "\n## Regimes of Δφ(μ_p, Bo) at I = {i}, p* = {p}\n");
+        md += &super::regimes::regimes_markdown(&delta_phi, i, p);
+    }
     let mut figures = super::compare::comparison_figures(finished)?;
-    figures.extend(delta_phi_figures(&delta_phi_points(finished, i, p), i, p)?);
+    figures.extend(delta_phi_figures(&delta_phi, i, p)?);
     figures.extend(super::cohesion_figures::cohesion_figures(finished, i, p)?);
     md += &figure_links(&figures);
     Ok(Report {
