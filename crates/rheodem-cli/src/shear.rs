@@ -72,6 +72,10 @@ pub struct ShearBoxArgs {
     /// papers' code: particles dragged with the mean flow, velocities relative to it).
     #[arg(long, value_parser = clap::value_parser!(ShearDynamics))]
     shear_dynamics: Option<ShearDynamics>,
+    /// Slabs along y of the coarse-grained fields averaged over the steady-state window
+    /// (fields.csv, fields.vti); 0 for none.
+    #[arg(long)]
+    cg_slabs: Option<usize>,
     /// Run directory (default: runs/shear-box).
     #[arg(long, short)]
     out: Option<PathBuf>,
@@ -117,6 +121,10 @@ fn spec_from(a: &ShearBoxArgs) -> Result<ShearBoxSpec> {
     set(
         "particles",
         a.particles.map(|n| toml::Value::Integer(n as i64)),
+    );
+    set(
+        "cg_slabs",
+        a.cg_slabs.map(|n| toml::Value::Integer(n as i64)),
     );
     set("strain", f(a.strain));
     set("transient_strain", f(a.transient_strain));

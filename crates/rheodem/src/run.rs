@@ -13,6 +13,7 @@
 //! Every file is written atomically (see [`crate::io::atomic`]).
 
 use crate::Simulation;
+use crate::cg::{self, ContactRecords, periodic::BoxFields};
 use crate::io::atomic::write_atomic;
 use crate::io::lock::{DirLock, LockError};
 use crate::io::{timeseries, vtk};
@@ -152,6 +153,10 @@ pub struct Run {
     pub snapshots: Vec<(f64, String)>,
     /// Wall-clock seconds spent stepping, over all sessions.
     pub wall_seconds: f64,
+    /// Coarse-grained fields averaged on the fly (`[fields]`); absent from checkpoints
+    /// written before they existed.
+    #[serde(default)]
+    pub fields: Option<BoxFields>,
     /// Step of the last checkpoint written or read by this process.
     #[serde(skip)]
     checkpointed: Option<u64>,
@@ -331,6 +336,8 @@ impl Run {
             snapshot_every: OutputPlan::every(steps, scenario.output.snapshots),
             checkpoint_every: OutputPlan::every(steps, scenario.output.checkpoints),
         };
+        // Checked by `build`.
+        let fields = scenario.fields.as_ref().map(BoxFields::new).transpose()?;
         let mut run = Run {
             scenario,
             resolved: built.resolved,
@@ -340,6 +347,7 @@ impl Run {
             rows: Vec::new(),
             snapshots: Vec::new(),
             wall_seconds: 0.0,
+            fields,
             checkpointed: None,
             lock: Some(lock),
         };
@@ -436,7 +444,14 @@ impl Run {
         while self.simulation.step < stop {
             let next = self.simulation.step + 1;
             let row = OutputPlan::due(self.plan.timeseries_every, next) || next == self.plan.steps;
-            self.simulation.step(row)?;
+            let end = self.simulation.time + self.simulation.dt;
+            if row && self.fields.as_ref().is_some_and(|f| f.wants(end)) {
+                let contacts = self.simulation.step_with::<ContactRecords>()?;
+                let fields = self.fields.as_mut().expect("checked");
+                fields.sample(&self.simulation, &contacts.0)?;
+            } else {
+                self.simulation.step(row)?;
+            }
             if row {
                 self.record(dir)?;
             } else if OutputPlan::due(self.plan.snapshot_every, next) {
@@ -523,6 +538,14 @@ impl Run {
         let path = dir.join("snapshots.pvd");
         write_atomic(&path, vtk::collection_pvd(&self.snapshots).as_bytes())
             .map_err(io_err("write", &path))?;
+        if let Some((grid, points)) = self.fields.as_ref().and_then(BoxFields::points) {
+            let path = dir.join("fields.csv");
+            write_atomic(&path, cg::output::to_csv(grid, &points).as_bytes())
+                .map_err(io_err("write", &path))?;
+            let path = dir.join("fields.vti");
+            write_atomic(&path, cg::output::to_vti(grid, &points).as_bytes())
+                .map_err(io_err("write", &path))?;
+        }
         self.write_summary(dir, status, error)
     }
 

@@ -61,6 +61,27 @@ fn malformed_scenarios_name_the_key_and_range() {
             &["missing field", "run"],
         ),
         (
+            "fields along an unknown axis",
+            (
+                "[run]",
+                "[fields]\nbins = [8]\nwidth = 2e-3\naxis = \"w\"\n[run]",
+            ),
+            &["fields.axis", "\"x\", \"y\" or \"z\""],
+        ),
+        (
+            "Cartesian fields with one cell count",
+            (
+                "[run]",
+                "[fields]\ngrid = \"cartesian\"\nbins = [8]\nwidth = 2e-3\n[run]",
+            ),
+            &["fields.bins", "3 positive cell count"],
+        ),
+        (
+            "fields with a kernel width of zero",
+            ("[run]", "[fields]\nbins = [8]\nwidth = 0.0\n[run]"),
+            &["fields.width"],
+        ),
+        (
             "negative density",
             ("density = 2000.0", "density = -1.0"),
             &["species[0].density", "positive"],

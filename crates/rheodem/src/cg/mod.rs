@@ -16,6 +16,7 @@ pub mod grid;
 pub mod kernel;
 pub mod mercury;
 pub mod output;
+pub mod periodic;
 pub mod shear_band;
 pub mod snapshot;
 pub mod sums;

@@ -562,6 +562,9 @@ struct Assembled {
 
 /// Everything of [`build`] up to the preparation.
 fn assemble(s: &Scenario, base_dir: &Path) -> Result<Assembled, ScenarioError> {
+    if let Some(f) = &s.fields {
+        crate::cg::periodic::BoxFields::new(f)?;
+    }
     if s.species.is_empty() {
         return Err(invalid("species", "[]", "declare at least one [[species]]"));
     }

@@ -66,6 +66,55 @@ pub struct Scenario {
     /// Control of `σ_yy` through `L_y` (needs `domain.shear_rate`).
     #[serde(default)]
     pub stress_control: Option<StressControlSpec>,
+    /// Coarse-grained fields averaged over the run (periodic boxes).
+    #[serde(default)]
+    pub fields: Option<FieldsSpec>,
+}
+
+/// Coarse-grained fields of a periodic box, averaged on the fly over the time-series rows
+/// from `start` on (docs/coarse-graining.md §7): written as `fields.csv` and `fields.vti`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FieldsSpec {
+    /// `"slabs"` (averaged over planes normal to `axis`) or `"cartesian"`.
+    #[serde(default)]
+    pub grid: FieldGrid,
+    /// The axis normal to the slabs, `"x"`, `"y"` (default, the shear gradient) or `"z"`.
+    #[serde(default = "default_axis")]
+    pub axis: String,
+    /// Cells: one count for slabs, three (`x`, `y`, `z`) for a Cartesian grid.
+    pub bins: Vec<usize>,
+    /// Kernel shape, `"lucy"` (default) or `"gaussian"`.
+    #[serde(default = "default_kernel")]
+    pub kernel: crate::cg::KernelShape,
+    /// Kernel width `w` (m), about a particle diameter.
+    pub width: f64,
+    /// Time from which the rows are averaged (s); default 0.
+    #[serde(default)]
+    pub start: f64,
+    /// Particle-scale constants for the local `I`, `p*` and `Bo`; without them those
+    /// fields are `NaN`.
+    #[serde(default)]
+    pub material: Option<crate::cg::Material>,
+}
+
+/// The grid of [`FieldsSpec`].
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum FieldGrid {
+    /// Slabs normal to one axis.
+    #[default]
+    Slabs,
+    /// Cells of a Cartesian grid over the box.
+    Cartesian,
+}
+
+fn default_axis() -> String {
+    "y".into()
+}
+
+fn default_kernel() -> crate::cg::KernelShape {
+    crate::cg::KernelShape::Lucy
 }
 
 /// Proportional control of `σ_yy` (docs/model.md §5):

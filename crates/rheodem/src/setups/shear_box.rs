@@ -13,6 +13,7 @@
 //! profile `v_x = γ̇ (y − lo_y)` under σ_yy control.
 
 use crate::analysis::{Estimate, block_average, halves_agree};
+use crate::cg::{KernelShape, Material};
 use crate::domain::ShearDynamics;
 use crate::measure::Observables;
 use crate::scenario::spec::*;
@@ -146,6 +147,24 @@ pub struct ShearBoxSpec {
     /// source papers' code). The older boolean `peculiar_contacts` reads as the first two.
     #[serde(default, alias = "peculiar_contacts")]
     pub shear_dynamics: ShearDynamics,
+    /// Slabs along `y` (the shear gradient) of the coarse-grained fields averaged over the
+    /// steady-state window, written as `fields.csv` and `fields.vti`; 0 (default) for none.
+    #[serde(default)]
+    pub cg_slabs: usize,
+    /// Kernel of the fields, `"lucy"` (default) or `"gaussian"`.
+    #[serde(default = "default_cg_kernel")]
+    pub cg_kernel: KernelShape,
+    /// Kernel width of the fields in mean diameters (default 1).
+    #[serde(default = "default_cg_width")]
+    pub cg_width: f64,
+}
+
+fn default_cg_kernel() -> KernelShape {
+    KernelShape::Lucy
+}
+
+fn default_cg_width() -> f64 {
+    1.0
 }
 
 /// SI values derived from a [`ShearBoxSpec`].
@@ -251,6 +270,14 @@ impl ShearBoxSpec {
         }
         in_range("control_time", self.control_time, 0.0, 1e6, true)?;
         in_range("rows_per_strain", self.rows_per_strain, 0.0, 1e6, true)?;
+        in_range("cg_width", self.cg_width, 0.0, 10.0, true)?;
+        if self.cg_slabs > 100_000 {
+            return Err(invalid(
+                "cg_slabs",
+                self.cg_slabs,
+                "must lie in [0, 100000]",
+            ));
+        }
         if bo > 0.0 && self.cohesion == Cohesion::None {
             return Err(invalid(
                 "cohesion",
@@ -410,6 +437,20 @@ impl ShearBoxSpec {
                 target: dv.pressure,
                 modulus: self.stiffness / d,
                 time: self.control_time * dv.stiffness_time,
+            }),
+            fields: (self.cg_slabs > 0).then(|| FieldsSpec {
+                grid: FieldGrid::Slabs,
+                axis: "y".into(),
+                bins: vec![self.cg_slabs],
+                kernel: self.cg_kernel,
+                width: self.cg_width * d,
+                start: self.transient_strain / dv.shear_rate,
+                material: Some(Material {
+                    diameter: d,
+                    particle_density: self.density,
+                    stiffness: self.stiffness,
+                    max_adhesion: dv.max_force,
+                }),
             }),
         })
     }
