@@ -228,14 +228,17 @@ fn curve(a: CurveArgs) -> Result<()> {
         },
         &[
             Series {
+                dashed_as: None,
                 label: "first approach",
                 points: &legs[0],
             },
             Series {
+                dashed_as: None,
                 label: "separation",
                 points: &legs[1],
             },
             Series {
+                dashed_as: None,
                 label: "second approach",
                 points: &legs[2],
             },

@@ -13,6 +13,9 @@ pub struct Series<'a> {
     pub label: &'a str,
     /// The points.
     pub points: &'a [(f64, f64)],
+    /// `None`: a solid line in the colour of its own index. `Some(k)`: a dashed line in the
+    /// colour of curve and marker set `k` (a fit beside the published law of those points).
+    pub dashed_as: Option<usize>,
 }
 
 /// Named measured points `(x, y, standard error of y)`, drawn as dots with error bars in
@@ -181,17 +184,27 @@ fn draw_plot<DB: DrawingBackend>(
         .enumerate()
         .filter(|(_, s)| !s.points.is_empty())
     {
-        let color = colour(k);
-        chart
-            .draw_series(LineSeries::new(
-                s.points.iter().copied(),
-                color.stroke_width(2),
-            ))
-            .map_err(err)?
-            .label(s.label)
-            .legend(move |(x, y)| {
-                PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2))
-            });
+        let color = colour(s.dashed_as.unwrap_or(k));
+        let style = color.stroke_width(2);
+        match s.dashed_as {
+            None => chart
+                .draw_series(LineSeries::new(s.points.iter().copied(), style))
+                .map_err(err)?
+                .label(s.label)
+                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], style)),
+            Some(_) => chart
+                .draw_series(DashedLineSeries::new(s.points.iter().copied(), 8, 5, style))
+                .map_err(err)?
+                .label(s.label)
+                .legend(move |(x, y)| {
+                    plotters::element::DashedPathElement::new(
+                        vec![(x, y), (x + 20, y)],
+                        5,
+                        3,
+                        style,
+                    )
+                }),
+        };
     }
     for (k, m) in markers
         .iter()

@@ -258,6 +258,7 @@ mod tests {
         let line = [(0.05, 0.0), (0.1, 0.07)];
         let mut map = ramp(&xs, &ys, &values);
         let overlays = [Series {
+            dashed_as: None,
             label: "centre",
             points: &line,
         }];

@@ -13,6 +13,7 @@
 //! the reasons when one fails or the averaging window still drifts, `unchecked` when no
 //! check applied (no fitted law for the point's `μ_p`).
 
+use super::law_fits::{FittedLaws, fitted_laws};
 use super::phase_diagram::Figure;
 use super::sweep::PointResult;
 use crate::domain::ShearDynamics;
@@ -170,6 +171,9 @@ pub fn comparison_markdown(results: &[PointResult]) -> String {
 /// Measured points `(x, mean, standard error)` of one group in a figure.
 type MeasuredPoints = Vec<(f64, f64, f64)>;
 
+/// A curve of a figure: legend label, points, and the group it is drawn dashed for.
+type Curve = (String, Vec<(f64, f64)>, Option<usize>);
+
 /// The points of the validation figures: measured points against the laws of Shi et al. 2020.
 const FIGURE_GROUPS: [(f64, ShearDynamics, &str); 4] = [
     (0.01, ShearDynamics::Lab, "μ_p = 0.01"),
@@ -197,6 +201,8 @@ struct FigureSpec {
     y: fn(&PointResult) -> Option<(f64, f64)>,
     /// The paper's law at `(μ_p, x)`.
     law: fn(f64, f64) -> Option<f64>,
+    /// The law fitted to the points of a group at `x` ([`fitted_laws`]), where fitted.
+    fitted: fn(&FittedLaws, f64) -> Option<f64>,
     /// Where the law is drawn.
     range: (f64, f64),
 }
@@ -225,6 +231,7 @@ const FIGURES: [FigureSpec; 6] = [
         x: |r| r.spec.bond,
         y: mu_of,
         law: |mu_p, bo| MuLaw::for_mu_p(mu_p).map(|l| l.mu(0.02, 0.01, bo)),
+        fitted: |f, bo| f.mu_cohesive.map(|l| l.mu(0.02, 0.01, bo)),
         range: (0.0, 4.0),
     },
     FigureSpec {
@@ -236,6 +243,7 @@ const FIGURES: [FigureSpec; 6] = [
         x: |r| r.spec.bond,
         y: phi_of,
         law: |mu_p, bo| PhiLaw::for_mu_p(mu_p).map(|l| l.phi(0.02, 0.01, bo)),
+        fitted: |f, bo| f.phi_cohesive.map(|l| l.phi(0.02, 0.01, bo)),
         range: (0.0, 4.0),
     },
     FigureSpec {
@@ -247,6 +255,7 @@ const FIGURES: [FigureSpec; 6] = [
         x: |r| r.spec.inertial,
         y: phi_of,
         law: |mu_p, i| PhiLaw::for_mu_p(mu_p).map(|l| l.phi(i, 0.01, 0.0)),
+        fitted: |f, i| f.phi.map(|l| l.phi(i, 0.01, 0.0)),
         range: (0.004, 0.11),
     },
     FigureSpec {
@@ -258,6 +267,7 @@ const FIGURES: [FigureSpec; 6] = [
         x: |r| r.spec.inertial,
         y: mu_of,
         law: |mu_p, i| MuLaw::for_mu_p(mu_p).map(|l| l.mu(i, 0.01, 0.0)),
+        fitted: |f, i| f.mu.map(|l| l.mu(i, 0.01, 0.0)),
         range: (0.004, 0.11),
     },
     FigureSpec {
@@ -269,6 +279,7 @@ const FIGURES: [FigureSpec; 6] = [
         x: |r| r.spec.softness,
         y: phi_of,
         law: |mu_p, p| PhiLaw::for_mu_p(mu_p).map(|l| l.phi(0.02, p, 0.0)),
+        fitted: |f, p| f.phi.map(|l| l.phi(0.02, p, 0.0)),
         range: (0.001, 0.022),
     },
     FigureSpec {
@@ -280,6 +291,7 @@ const FIGURES: [FigureSpec; 6] = [
         x: |r| r.spec.softness,
         y: mu_of,
         law: |mu_p, p| MuLaw::for_mu_p(mu_p).map(|l| l.mu(0.02, p, 0.0)),
+        fitted: |f, p| f.mu.map(|l| l.mu(0.02, p, 0.0)),
         range: (0.001, 0.022),
     },
 ];
@@ -287,11 +299,13 @@ const FIGURES: [FigureSpec; 6] = [
 /// The validation figures (file stem, SVG and PNG): measured steady states with their
 /// standard errors against the laws of Shi et al. 2020, one colour per `μ_p` (and one for
 /// each other shear dynamics, docs/model.md §4.4–4.5; the laws are drawn for the lab
-/// frame's groups). Where several
+/// frame's groups), with the laws fitted to each group's points ([`fitted_laws`]) where
+/// its points determine them. Where several
 /// runs share a point, the longest is shown. Figures without any measured point are left
 /// out.
 pub fn comparison_figures(results: &[PointResult]) -> Result<Vec<Figure>, String> {
     let mut out = Vec::new();
+    let fitted = fitted_laws(results);
     for fig in &FIGURES {
         let mut markers: Vec<(&str, MeasuredPoints)> = Vec::new();
         for &(mu_p, dynamics, label) in &FIGURE_GROUPS {
@@ -315,23 +329,46 @@ pub fn comparison_figures(results: &[PointResult]) -> Result<Vec<Figure>, String
         if markers.iter().all(|(_, p)| p.is_empty()) {
             continue;
         }
-        let curves: Vec<(String, Vec<(f64, f64)>)> = FIGURE_GROUPS
+        // The published laws at the index of their group (so in its colour), the fits
+        // after them, dashed in their group's colour.
+        let sample = |f: &dyn Fn(f64) -> Option<f64>| -> Vec<(f64, f64)> {
+            let (a, b) = fig.range;
+            (0..=60)
+                .filter_map(|k| {
+                    let x = a + (b - a) * k as f64 / 60.0;
+                    f(x).map(|y| (x, y))
+                })
+                .collect()
+        };
+        let mut curves: Vec<Curve> = FIGURE_GROUPS
             .iter()
-            .filter(|(_, dynamics, _)| *dynamics == ShearDynamics::Lab)
-            .map(|&(mu_p, _, label)| {
-                let (a, b) = fig.range;
-                let points = (0..=60)
-                    .filter_map(|k| {
-                        let x = a + (b - a) * k as f64 / 60.0;
-                        (fig.law)(mu_p, x).map(|y| (x, y))
-                    })
-                    .collect();
-                (format!("Shi et al. 2020, {label}"), points)
+            .map(|&(mu_p, dynamics, label)| {
+                let points = if dynamics == ShearDynamics::Lab {
+                    sample(&|x| (fig.law)(mu_p, x))
+                } else {
+                    Vec::new()
+                };
+                (format!("Shi et al. 2020, {label}"), points, None)
             })
             .collect();
+        for (g, &(mu_p, dynamics, label)) in FIGURE_GROUPS.iter().enumerate() {
+            if let Some(f) = fitted
+                .iter()
+                .find(|f| f.dynamics == dynamics && f.mu_p == mu_p)
+            {
+                let points = sample(&|x| (fig.fitted)(f, x));
+                if !points.is_empty() {
+                    curves.push((format!("fit, {label}"), points, Some(g)));
+                }
+            }
+        }
         let series: Vec<Series<'_>> = curves
             .iter()
-            .map(|(label, points)| Series { label, points })
+            .map(|(label, points, dashed_as)| Series {
+                label,
+                points,
+                dashed_as: *dashed_as,
+            })
             .collect();
         let marks: Vec<Markers<'_>> = markers
             .iter()

@@ -46,6 +46,10 @@ struct GroupFits {
     gc: Option<CoefficientFit>,
     mu: Option<CoefficientFit>,
     mu_cohesion: Option<CoefficientFit>,
+    /// Eq. 13 that `g_c` multiplies: fitted, or anchored at the `Bo = 0` points.
+    phi_base: Option<PhiLaw>,
+    /// Eq. 1A at `Bo = 0` as fitted.
+    mu_base: Option<MuLaw>,
     /// Values a fit held because the points could not determine them, one line each.
     held: Vec<String>,
     /// Why a fit was not made, one line per fit.
@@ -93,29 +97,35 @@ fn fit_group(mu_p: f64, points: &[MeasuredPoint]) -> GroupFits {
         Err(_) => None,
     };
     let phi = keep("φ_0, I_φ, p*_φ", phi_fit);
+    let mut phi_base = None;
     let gc = match base {
-        Some(Ok(base)) if cohesive > 0 => keep(
-            "p₁ … p₄",
-            fit_cohesion_factor(points, &FitRange::PHI, &base),
-        ),
+        Some(Ok(base)) => {
+            phi_base = Some(base);
+            if cohesive > 0 {
+                keep(
+                    "p₁ … p₄",
+                    fit_cohesion_factor(points, &FitRange::PHI, &base),
+                )
+            } else {
+                None
+            }
+        }
         Some(Err(e)) => keep("p₁ … p₄", Err(e)),
-        _ => None,
+        None => None,
     };
     let mu = keep("μ_0, μ_∞, I_μ, p*_μ", fit_mu_law(points, &FitRange::MU));
-    let mu_cohesion = match (&mu, cohesive) {
-        (Some(f), c) if c > 0 => {
-            let base = MuLaw {
-                mu_p,
-                setup: SetUp::SimpleShear,
-                mu_0: f.fit.params[0],
-                mu_inf: f.fit.params[1],
-                i_mu: f.fit.params[2],
-                p_mu: f.fit.params[3],
-                cohesion: CohesionFactor::Linear { slope: 0.0 },
-                linear_slope: None,
-            };
-            keep("α₁, β₁", fit_mu_cohesion(points, &FitRange::MU, &base))
-        }
+    let mu_base = mu.as_ref().map(|f| MuLaw {
+        mu_p,
+        setup: SetUp::SimpleShear,
+        mu_0: f.fit.params[0],
+        mu_inf: f.fit.params[1],
+        i_mu: f.fit.params[2],
+        p_mu: f.fit.params[3],
+        cohesion: CohesionFactor::Linear { slope: 0.0 },
+        linear_slope: None,
+    });
+    let mu_cohesion = match mu_base {
+        Some(base) if cohesive > 0 => keep("α₁, β₁", fit_mu_cohesion(points, &FitRange::MU, &base)),
         _ => None,
     };
     GroupFits {
@@ -123,9 +133,69 @@ fn fit_group(mu_p: f64, points: &[MeasuredPoint]) -> GroupFits {
         gc,
         mu,
         mu_cohesion,
+        phi_base,
+        mu_base,
         held,
         notes,
     }
+}
+
+/// The laws fitted to one group of points (one shear dynamics and `μ_p`), ready to draw.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FittedLaws {
+    /// Shear dynamics of the points.
+    pub dynamics: ShearDynamics,
+    /// Interparticle friction of the points.
+    pub mu_p: f64,
+    /// Eq. 13 with the fitted `φ_0, I_φ, p*_φ` (`g_c = 1`), where fitted.
+    pub phi: Option<PhiLaw>,
+    /// Eq. 16: the law `g_c` was fitted on (fitted or anchored at `Bo = 0`) with the
+    /// fitted `p₁ … p₄`, where fitted.
+    pub phi_cohesive: Option<PhiLaw>,
+    /// Eq. 1A at `Bo = 0` with the fitted `μ_0, μ_∞, I_μ, p*_μ`, where fitted.
+    pub mu: Option<MuLaw>,
+    /// Eq. 1A with the fitted cohesion factor `1 + α₁ Bo^β₁` as well, where fitted.
+    pub mu_cohesive: Option<MuLaw>,
+}
+
+/// The fitted laws of every group of `results` ([`fit_groups`]), in the same order.
+pub fn fitted_laws(results: &[PointResult]) -> Vec<FittedLaws> {
+    fit_groups(results)
+        .iter()
+        .map(|(dynamics, mu_p, points)| {
+            let f = fit_group(*mu_p, points);
+            let phi_cohesive = match (f.phi_base, &f.gc) {
+                (Some(base), Some(gc)) => Some(PhiLaw {
+                    gc: [
+                        gc.fit.params[0],
+                        gc.fit.params[1],
+                        gc.fit.params[2],
+                        gc.fit.params[3],
+                    ],
+                    ..base
+                }),
+                _ => None,
+            };
+            let mu_cohesive = match (f.mu_base, &f.mu_cohesion) {
+                (Some(base), Some(c)) => Some(MuLaw {
+                    cohesion: CohesionFactor::Power {
+                        alpha: c.fit.params[0],
+                        beta: c.fit.params[1],
+                    },
+                    ..base
+                }),
+                _ => None,
+            };
+            FittedLaws {
+                dynamics: *dynamics,
+                mu_p: *mu_p,
+                phi: f.phi.as_ref().and(f.phi_base),
+                phi_cohesive,
+                mu: f.mu_base,
+                mu_cohesive,
+            }
+        })
+        .collect()
 }
 
 /// The fitted coefficients of every group as markdown tables laid out like Shi et al.
@@ -253,4 +323,50 @@ fn table8(phi: &[CoefficientFit], label: &str) -> String {
         );
     }
     s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::setups::sweep::synthetic_result;
+
+    /// Points on Eq. 16 at `μ_p = 0.01` (Tables 3 and 5), over `I` and `p*` at `Bo = 0` and
+    /// over `Bo` = 1 … 5 at `I = 0.02`, `p* = 0.01`: the fitted laws give those `φ` back.
+    #[test]
+    fn fitted_laws_reproduce_the_points_they_were_fitted_on() {
+        let truth = PhiLaw::for_mu_p(0.01).expect("tabulated");
+        let point = |i: f64, p: f64, bo: f64| {
+            synthetic_result(
+                &format!(
+                    "mu_p = 0.01\ninertial = {i}\nsoftness = {p}\nbond = {bo}\ncohesion = \"{}\"",
+                    if bo > 0.0 { "reversible" } else { "none" }
+                ),
+                truth.phi(i, p, bo),
+                1e-4,
+            )
+        };
+        let mut results = Vec::new();
+        for i in [0.005, 0.02, 0.05, 0.1] {
+            for p in [0.002, 0.01, 0.02] {
+                results.push(point(i, p, 0.0));
+            }
+        }
+        for bo in [1.0, 2.0, 3.0, 4.0, 5.0] {
+            results.push(point(0.02, 0.01, bo));
+        }
+        let laws = fitted_laws(&results);
+        assert_eq!(laws.len(), 1);
+        let (phi, cohesive) = (
+            laws[0].phi.expect("Eq. 13 fitted"),
+            laws[0].phi_cohesive.expect("g_c fitted"),
+        );
+        for i in [0.005, 0.05, 0.1] {
+            let (a, b) = (phi.phi(i, 0.01, 0.0), truth.phi(i, 0.01, 0.0));
+            assert!((a - b).abs() < 1e-6, "I = {i}: {a} vs {b}");
+        }
+        for bo in [1.0, 3.0, 5.0] {
+            let (a, b) = (cohesive.phi(0.02, 0.01, bo), truth.phi(0.02, 0.01, bo));
+            assert!((a - b).abs() < 1e-6, "Bo = {bo}: {a} vs {b}");
+        }
+    }
 }

@@ -297,6 +297,7 @@ pub fn group_figure(
         .iter()
         .zip(&curve_labels)
         .map(|(g, label)| Series {
+            dashed_as: None,
             label,
             points: &g.curve,
         })
@@ -332,6 +333,7 @@ pub fn phase_map_figure(name: &str, title: &str, grid: &Grid) -> Result<Figure, 
         values: grid.values[skip * nx..].to_vec(),
     });
     let overlays = [Series {
+        dashed_as: None,
         label: "Δφ = 0: the boundary between relative compression and dilation",
         points: &boundary,
     }];

@@ -1354,14 +1354,17 @@ impl SplitBottomRun {
             },
             &[
                 Series {
+                    dashed_as: None,
                     label: "net (fixed − rotating parts)",
                     points: &net,
                 },
                 Series {
+                    dashed_as: None,
                     label: "drive (−rotating parts)",
                     points: &drive,
                 },
                 Series {
+                    dashed_as: None,
                     label: "balance (all parts)",
                     points: &balance,
                 },
@@ -1404,6 +1407,7 @@ impl SplitBottomRun {
             .iter()
             .zip(&names)
             .map(|(p, n)| Series {
+                dashed_as: None,
                 label: n,
                 points: p,
             })

@@ -521,6 +521,7 @@ fn write_band_figure(band: &BandRheology, dir: &Path) -> Result<(), RunError> {
             y: "shear stress τ (Pa)",
         },
         &[Series {
+            dashed_as: None,
             label: &label,
             points: &line,
         }],
@@ -588,10 +589,12 @@ pub fn write_maps(
         .collect();
     let overlays = [
         Series {
+            dashed_as: None,
             label: "band centre R_c (erf fit)",
             points: &erf,
         },
         Series {
+            dashed_as: None,
             label: "strain-rate maximum",
             points: &peak,
         },
