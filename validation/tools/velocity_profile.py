@@ -5,7 +5,9 @@ Reads the snapshots of a run directory (snapshots/*.vtp, written by rheodem) and
 height L_y of the same step from timeseries.csv, cuts the box into SLABS slabs along y and
 prints, for every snapshot, the local shear rate of each slab (the difference of the
 volume-weighted mean v_x of neighbouring slabs over their distance) divided by the mean
-rate of the whole box, and the slab volume fractions. Uniform simple shear gives local
+rate of the whole box, and the slab volume fractions. Under affine drag (as the run's
+scenario.toml says) the stored velocities exclude the mean flow, which is added back, so
+the profile is the lab frame's in every dynamics. Uniform simple shear gives local
 rates of 1 within noise; a shear band shows as a few slabs carrying most of the rate.
 
 Usage: python3 validation/tools/velocity_profile.py RUN_DIR [SLABS]   (standard library only)
@@ -17,6 +19,7 @@ import math
 import os
 import re
 import sys
+import tomllib
 
 
 def arrays(path):
@@ -39,8 +42,19 @@ def box_heights(run):
         return {int(row["step"]): float(row["box_y"]) for row in csv.DictReader(f)}
 
 
-def profile(snapshot, height, slabs):
-    """Slab volume fractions and volume-weighted mean v_x, bottom to top."""
+def mean_flow(run):
+    """(γ̇, lo_y) when the run's stored velocities exclude the mean flow (affine drag),
+    so that γ̇ (y − lo_y) is added back to v_x; (0, 0) otherwise."""
+    with open(os.path.join(run, "scenario.toml"), "rb") as f:
+        domain = tomllib.load(f)["domain"]
+    if domain.get("shear_dynamics") == "affine-drag":
+        return domain["shear_rate"], domain.get("lo", [0.0, 0.0, 0.0])[1]
+    return 0.0, 0.0
+
+
+def profile(snapshot, height, slabs, flow=(0.0, 0.0)):
+    """Slab volume fractions and volume-weighted mean lab-frame v_x, bottom to top."""
+    rate, lo_y = flow
     a = arrays(snapshot)
     vol = [0.0] * slabs
     mom = [0.0] * slabs
@@ -48,7 +62,7 @@ def profile(snapshot, height, slabs):
         s = min(slabs - 1, max(0, int(math.floor((y % height) / height * slabs))))
         v = 4.0 / 3.0 * math.pi * r**3
         vol[s] += v
-        mom[s] += v * vx
+        mom[s] += v * (vx + rate * (y - lo_y))
     return vol, [m / v for m, v in zip(mom, vol)]
 
 
@@ -57,13 +71,14 @@ def main():
     slabs = int(sys.argv[2]) if len(sys.argv) > 2 else 8
     heights = box_heights(run)
     steps = sorted(heights)
+    flow = mean_flow(run)
     print(f"{run}: {slabs} slabs; local shear rate / mean rate, then slab volume fractions")
     deviations = []
     for snap in sorted(glob.glob(os.path.join(run, "snapshots", "*.vtp")))[1:]:
         step = int(re.search(r"(\d+)\.vtp$", snap).group(1))
         near = min(steps, key=lambda s: abs(s - step))
         height = heights[near]
-        vol, vx = profile(snap, height, slabs)
+        vol, vx = profile(snap, height, slabs, flow)
         dy = height / slabs
         rates = [(vx[k + 1] - vx[k]) / dy for k in range(slabs - 1)]
         mean = (vx[-1] - vx[0]) / (dy * (slabs - 1))
