@@ -214,6 +214,12 @@ pub(crate) fn report(r: &PointResult, dir: &Path) {
                 r.derived.pressure,
                 ss.mean_stress.mean
             );
+            if let Some(s) = &ss.slab_rates {
+                println!(
+                    "local shear rate over γ̇ in {} slabs: {:.2}–{:.2}, rms deviation {:.2} (1 everywhere for homogeneous shear)",
+                    s.slabs, s.min, s.max, s.rms_deviation
+                );
+            }
             if !ss.steady {
                 eprintln!(
                     "warning: {} did NOT reach a steady state: {}",

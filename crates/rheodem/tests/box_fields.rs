@@ -8,7 +8,7 @@ use rheodem::cg::{CgSums, ContactRecords, Kernel, fields};
 use rheodem::domain::ShearDynamics;
 use rheodem::run::Run;
 use rheodem::scenario::{Scenario, build};
-use rheodem::setups::shear_box::ShearBoxSpec;
+use rheodem::setups::shear_box::{ShearBoxSpec, SlabRates};
 use std::path::{Path, PathBuf};
 
 /// A fresh directory for one test's run.
@@ -95,6 +95,14 @@ fn slabs_integrate_to_the_box_measurements_of_the_same_rows() {
         assert!(p.inertial_number > 0.0 && p.softness > 0.0, "{p:?}");
         assert_eq!(p.bond_number, 0.0);
     }
+    // The spread of the slabs' rates about γ̇: their mean is γ̇ within the noise of a
+    // short small run, and the extremes bracket it.
+    let shear_rate = spec("lab").derive().expect("derived").shear_rate;
+    let rates = SlabRates::of(&points, shear_rate).expect("rates");
+    assert_eq!(rates.slabs, 6);
+    assert!(rates.min <= 1.0 && 1.0 <= rates.max, "{rates:?}");
+    let mean = points.iter().map(|p| p.strain_rate).sum::<f64>() / 6.0 / shear_rate;
+    assert!((mean - 1.0).abs() < 0.3, "mean local rate {mean} γ̇");
     let csv = std::fs::read_to_string(dir.join("fields.csv")).expect("fields.csv");
     assert_eq!(csv.lines().count(), 7, "header and one row per slab");
     assert!(dir.join("fields.vti").exists());

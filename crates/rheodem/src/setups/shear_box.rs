@@ -13,7 +13,7 @@
 //! profile `v_x = γ̇ (y − lo_y)` under σ_yy control.
 
 use crate::analysis::{Estimate, block_average, halves_agree};
-use crate::cg::{KernelShape, Material};
+use crate::cg::{FieldPoint, KernelShape, Material};
 use crate::domain::ShearDynamics;
 use crate::measure::Observables;
 use crate::scenario::spec::*;
@@ -492,6 +492,43 @@ pub struct SteadyState {
     pub softness_measured: f64,
     /// `Bo` from the measured `σ_yy`.
     pub bond_measured: f64,
+    /// How evenly the slabs of the fields (`cg_slabs`) shared the shear over the window;
+    /// absent without fields.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub slab_rates: Option<SlabRates>,
+}
+
+/// The local strain rate of the slabs of a run's time-averaged fields, in units of the
+/// imposed `γ̇`: 1 in every slab for homogeneous shear, spread out when the shear
+/// localises (docs/model.md §6.1).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct SlabRates {
+    /// Number of slabs.
+    pub slabs: usize,
+    /// Smallest local rate over `γ̇`.
+    pub min: f64,
+    /// Largest local rate over `γ̇`.
+    pub max: f64,
+    /// Root-mean-square deviation of the local rates from `γ̇`, over `γ̇`.
+    pub rms_deviation: f64,
+}
+
+impl SlabRates {
+    /// The spread of `points`' strain rates (1/s) about `shear_rate` (1/s); `None` without
+    /// points or with a non-finite rate.
+    pub fn of(points: &[FieldPoint], shear_rate: f64) -> Option<SlabRates> {
+        let rates: Vec<f64> = points.iter().map(|p| p.strain_rate / shear_rate).collect();
+        if rates.is_empty() || rates.iter().any(|r| !r.is_finite()) {
+            return None;
+        }
+        let n = rates.len() as f64;
+        Some(SlabRates {
+            slabs: rates.len(),
+            min: rates.iter().copied().fold(f64::INFINITY, f64::min),
+            max: rates.iter().copied().fold(f64::NEG_INFINITY, f64::max),
+            rms_deviation: (rates.iter().map(|r| (r - 1.0).powi(2)).sum::<f64>() / n).sqrt(),
+        })
+    }
 }
 
 /// Averages the rows past `transient_strain` (the strain of a row is `γ̇ t`). Steady when
@@ -565,5 +602,6 @@ pub fn steady_state(
         } else {
             0.0
         },
+        slab_rates: None,
     })
 }

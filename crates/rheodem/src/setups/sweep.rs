@@ -24,7 +24,7 @@
 //! Every point, after merging, must be a complete [`ShearBoxSpec`]: here the grid's four
 //! points take `inertial`, `softness` and `cohesion` from `[base]`.
 
-use super::shear_box::{ShearBoxSpec, SteadyState, steady_state};
+use super::shear_box::{ShearBoxSpec, SlabRates, SteadyState, steady_state};
 use crate::domain::ShearDynamics;
 use crate::io::atomic::write_atomic;
 use crate::run::{Run, RunError, io_err};
@@ -271,7 +271,14 @@ pub fn run_point(
         name: name.to_string(),
         spec: spec.clone(),
         derived,
-        steady_state: steady_state(&run.rows, spec, &derived),
+        steady_state: steady_state(&run.rows, spec, &derived).map(|ss| SteadyState {
+            slab_rates: run
+                .fields
+                .as_ref()
+                .and_then(|f| f.points())
+                .and_then(|(_, points)| SlabRates::of(&points, derived.shear_rate)),
+            ..ss
+        }),
         wall_seconds: run.wall_seconds,
         commit: crate::COMMIT.to_string(),
     };
@@ -481,6 +488,7 @@ pub(crate) fn synthetic_result(spec: &str, phi: f64, phi_err: f64) -> PointResul
         inertial_measured: spec.inertial,
         softness_measured: spec.softness,
         bond_measured: spec.bond,
+        slab_rates: None,
     };
     PointResult {
         name: format!("{}-{}-{}", spec.mu_p, spec.bond, spec.strain),
