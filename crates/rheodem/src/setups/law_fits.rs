@@ -264,24 +264,20 @@ pub fn fit_tables(results: &[PointResult]) -> String {
             s += &table8(&phi, &label);
             s += "\n";
         }
-        let held: Vec<&String> = fits.iter().flat_map(|(_, f)| &f.held).collect();
-        if !held.is_empty() {
-            let _ = writeln!(s, "Held:");
-            for h in held {
-                let _ = writeln!(s, "- {h}");
-            }
-            s += "\n";
-        }
-        let notes: Vec<&String> = fits.iter().flat_map(|(_, f)| &f.notes).collect();
-        if !notes.is_empty() {
-            let _ = writeln!(s, "Not fitted:");
-            for n in notes {
-                let _ = writeln!(s, "- {n}");
-            }
-            s += "\n";
-        }
+        s += &bullets("Held", fits.iter().flat_map(|(_, f)| &f.held));
+        s += &bullets("Not fitted", fits.iter().flat_map(|(_, f)| &f.notes));
     }
     s
+}
+
+/// `title:` and one bullet per line of `lines`, then a blank line; nothing without lines.
+fn bullets<'a>(title: &str, lines: impl Iterator<Item = &'a String>) -> String {
+    let body: String = lines.map(|l| format!("- {l}\n")).collect();
+    if body.is_empty() {
+        String::new()
+    } else {
+        format!("{title}:\n{body}\n")
+    }
 }
 
 /// Eq. 1B fitted to `φ_0, I_φ, p*_φ` across the groups, beside the paper's Table 8.
