@@ -1,25 +1,32 @@
-//! `rheodem cg`: the coarse-grained fields of a split-bottom run from its stored snapshots.
+//! `rheodem cg`: the coarse-grained fields of a split-bottom run from its stored snapshots,
+//! or of a periodic-box run (a scenario, the shear box) from its stored samples.
 
 use anyhow::{Context, Result};
 use clap::Args;
 use rheodem::cg::KernelShape;
+use rheodem::run::{samples, write_fields};
+use rheodem::scenario::spec::FieldGrid;
 use rheodem::setups::split_bottom_fields::{
     FieldSettings, export_mercury, offline_fields, read_run, write_outputs,
 };
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 /// Arguments of `cg`.
 #[derive(Args)]
 pub struct CgArgs {
-    /// The split-bottom run directory (its checkpoint and snapshot files are read, not changed).
+    /// The run directory: a split-bottom run (its checkpoint and snapshot files are read),
+    /// or a scenario or shear-box run that stored its fields' samples (`records = true` in
+    /// `[fields]`, the shear box's `--cg-records`). Nothing in it is changed.
     dir: PathBuf,
     /// Kernel (default: the run's `cg_kernel`).
     #[arg(long, value_enum)]
     kernel: Option<KernelArg>,
-    /// Kernel width in particle diameters (default: the run's `cg_width`).
+    /// Kernel width in particle diameters (default: the run's). For a box run the diameter is
+    /// `fields.material.diameter`, or else the mean diameter of its particles.
     #[arg(long)]
     width: Option<f64>,
-    /// Grid spacing in particle diameters (default: the run's `cg_spacing`).
+    /// Grid spacing in particle diameters (default: the run's; a box run's cell counts are
+    /// then the box's lengths over it, rounded).
     #[arg(long)]
     spacing: Option<f64>,
     /// Worker threads (default: all cores).
@@ -43,18 +50,27 @@ enum KernelArg {
     Lucy,
 }
 
+impl KernelArg {
+    fn shape(self) -> KernelShape {
+        match self {
+            KernelArg::Gaussian => KernelShape::Gaussian,
+            KernelArg::Lucy => KernelShape::Lucy,
+        }
+    }
+}
+
 /// Runs `rheodem cg`.
 pub fn run(args: CgArgs) -> Result<()> {
     let (pool, _) = crate::pool(args.threads)?;
+    if !args.dir.join("split-bottom.toml").exists() && args.dir.join("scenario.toml").exists() {
+        return pool.install(|| box_run(&args));
+    }
     let run = read_run(&args.dir)
         .with_context(|| format!("cannot read the run in {}", args.dir.display()))?;
     // The run's own settings, each overridden by its option.
     let mut s = FieldSettings::of(&run.spec);
     if let Some(k) = args.kernel {
-        s.kernel = match k {
-            KernelArg::Gaussian => KernelShape::Gaussian,
-            KernelArg::Lucy => KernelShape::Lucy,
-        };
+        s.kernel = k.shape();
     }
     s.width = args.width.unwrap_or(s.width);
     s.spacing = args.spacing.unwrap_or(s.spacing);
@@ -90,5 +106,71 @@ pub fn run(args: CgArgs) -> Result<()> {
             out.join("mercury.fstat").display()
         );
     }
+    Ok(())
+}
+
+/// `rheodem cg` for a periodic-box run: its fields again from its stored samples.
+fn box_run(args: &CgArgs) -> Result<()> {
+    anyhow::ensure!(
+        !args.mercury,
+        "--mercury exports split-bottom runs; {} is a periodic-box run",
+        args.dir.display()
+    );
+    let dir: &Path = &args.dir;
+    let run = samples::read_run(dir)
+        .with_context(|| format!("cannot read the run in {}", dir.display()))?;
+    let Some(mut spec) = run.fields.as_ref().map(|f| f.spec.clone()) else {
+        anyhow::bail!(
+            "{}: the run has no [fields], so it stored no samples to coarse-grain",
+            dir.display()
+        );
+    };
+    let p = &run.simulation.particles;
+    let diameter = spec.material.as_ref().map_or_else(
+        || 2.0 * p.radius.iter().sum::<f64>() / p.len().max(1) as f64,
+        |m| m.diameter,
+    );
+    if let Some(k) = args.kernel {
+        spec.kernel = k.shape();
+    }
+    if let Some(w) = args.width {
+        anyhow::ensure!(
+            w.is_finite() && w > 0.0,
+            "--width {w}: must be a positive number of particle diameters"
+        );
+        spec.width = w * diameter;
+    }
+    if let Some(h) = args.spacing {
+        anyhow::ensure!(
+            h.is_finite() && h > 0.0,
+            "--spacing {h}: must be a positive number of particle diameters"
+        );
+        let l = run.simulation.domain.lengths();
+        let cells = |len: f64| ((len / (h * diameter)).round() as usize).max(1);
+        spec.bins = match spec.grid {
+            FieldGrid::Slabs => {
+                let axis = ["x", "y", "z"]
+                    .iter()
+                    .position(|a| *a == spec.axis)
+                    .unwrap_or(1);
+                vec![cells(l[axis])]
+            }
+            FieldGrid::Cartesian => vec![cells(l.x), cells(l.y), cells(l.z)],
+        };
+    }
+    let fields = samples::offline_fields(dir, &run, &spec)?;
+    let out = args.out.clone().unwrap_or_else(|| dir.join("cg"));
+    std::fs::create_dir_all(&out).with_context(|| format!("cannot create {}", out.display()))?;
+    write_fields(&fields, &out)?;
+    let sums = fields.sums.as_ref().expect("at least one sample");
+    println!(
+        "{} samples from t = {} s coarse-grained onto {} points ({:?} kernel, width {:.4} m): {}",
+        sums.snapshots,
+        spec.start,
+        sums.grid.len(),
+        spec.kernel,
+        spec.width,
+        out.join("fields.csv").display()
+    );
     Ok(())
 }

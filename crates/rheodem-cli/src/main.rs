@@ -62,7 +62,8 @@ enum Command {
     ShearBox(shear::ShearBoxArgs),
     /// Split-bottom ring shear cell: fill, settle, shear; wall torque and the shear band.
     SplitBottom(split_bottom::SplitBottomArgs),
-    /// Coarse-grained fields of a split-bottom run from its stored snapshots (fields.csv and
+    /// Coarse-grained fields of a run again, with its settings or others: a split-bottom run
+    /// from its stored snapshots, a periodic-box run from its stored samples (fields.csv and
     /// fields.vti; docs/coarse-graining.md).
     Cg(cg::CgArgs),
     /// Run a list or grid of shear-box points (resumable), collecting one results table.

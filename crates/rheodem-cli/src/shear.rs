@@ -76,6 +76,10 @@ pub struct ShearBoxArgs {
     /// (fields.csv, fields.vti); 0 for none.
     #[arg(long)]
     cg_slabs: Option<usize>,
+    /// Also store the fields' samples (particles, contacts and box, under DIR/fields/), so
+    /// that `rheodem cg DIR` can coarse-grain the run again with other settings.
+    #[arg(long)]
+    cg_records: bool,
     /// Run directory (default: runs/shear-box).
     #[arg(long, short)]
     out: Option<PathBuf>,
@@ -126,6 +130,9 @@ fn spec_from(a: &ShearBoxArgs) -> Result<ShearBoxSpec> {
         "cg_slabs",
         a.cg_slabs.map(|n| toml::Value::Integer(n as i64)),
     );
+    if a.cg_records {
+        set("cg_records", Some(toml::Value::Boolean(true)));
+    }
     set("strain", f(a.strain));
     set("transient_strain", f(a.transient_strain));
     set(

@@ -130,6 +130,87 @@ fn run_writes_its_outputs_and_resume_sees_it_complete() {
     let _ = std::fs::remove_file(&scenario);
 }
 
+/// A shear box that stores its fields' samples is coarse-grained again by `rheodem cg`:
+/// with its own settings the file equals the run's `fields.csv`, with another slab count
+/// it has that many rows; a run without samples and a box run with `--mercury` are refused.
+#[test]
+fn cg_coarse_grains_a_shear_box_again_from_its_samples() {
+    let dir = temp("cg-box");
+    let dir_s = dir.to_string_lossy().into_owned();
+    let out = rheodem(&[
+        "shear-box",
+        "--mu-p",
+        "0.3",
+        "--inertial",
+        "0.05",
+        "--softness",
+        "0.01",
+        "--particles",
+        "256",
+        "--strain",
+        "1.5",
+        "--transient-strain",
+        "1",
+        "--cg-slabs",
+        "6",
+        "--cg-records",
+        "--out",
+        &dir_s,
+        "--quiet",
+        "--threads",
+        "1",
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let out = rheodem(&["cg", &dir_s, "--threads", "1"]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let read = |p: PathBuf| std::fs::read_to_string(p).expect("fields.csv");
+    assert_eq!(
+        read(dir.join("cg/fields.csv")),
+        read(dir.join("fields.csv")),
+        "the run's own settings give the run's fields"
+    );
+    let again = dir.join("again");
+    let out = rheodem(&[
+        "cg",
+        &dir_s,
+        "--spacing",
+        "0.5",
+        "--width",
+        "2",
+        "--out",
+        &again.to_string_lossy(),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let rows = read(again.join("fields.csv")).lines().count() - 1;
+    assert!((10..=16).contains(&rows), "{rows} slabs of half a diameter");
+    let out = rheodem(&["cg", &dir_s, "--mercury"]);
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("--mercury"));
+    let out = rheodem(&["cg", &dir_s, "--width=-1"]);
+    assert!(String::from_utf8_lossy(&out.stderr).contains("--width"));
+    std::fs::remove_dir_all(dir.join("fields")).expect("remove the samples");
+    let out = rheodem(&["cg", &dir_s]);
+    assert!(!out.status.success());
+    assert!(
+        String::from_utf8_lossy(&out.stderr).contains("no stored samples"),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
 #[test]
 fn contact_tools_write_csv_and_svg() {
     let dir = temp("curve");

@@ -7,6 +7,8 @@
 //!   distribution, preparation outcome, version, seed);
 //! - `timeseries.csv`: one row of observables every `T/timeseries_rows`;
 //! - `snapshots/*.vtp` and `snapshots.pvd`: particle snapshots for ParaView;
+//! - `fields.csv` and `fields.vti`: the fields averaged on the fly (`[fields]`), and under
+//!   `fields/` their samples when stored ([`samples`]);
 //! - `checkpoint.bin`: the complete state at the last checkpoint;
 //! - `summary.json`: status, progress, final observables.
 //!
@@ -25,6 +27,8 @@ use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::time::Instant;
+
+pub mod samples;
 
 /// Errors of a run.
 #[derive(Debug, thiserror::Error)]
@@ -328,6 +332,7 @@ impl Run {
         };
         let snapshots = dir.join("snapshots");
         remove_snapshots(&snapshots)?;
+        samples::remove_all(dir)?;
         std::fs::create_dir_all(&snapshots).map_err(io_err("create the directory", &snapshots))?;
         let steps = built.resolved.steps;
         let plan = OutputPlan {
@@ -448,7 +453,11 @@ impl Run {
             if row && self.fields.as_ref().is_some_and(|f| f.wants(end)) {
                 let contacts = self.simulation.step_with::<ContactRecords>()?;
                 let fields = self.fields.as_mut().expect("checked");
-                fields.sample(&self.simulation, &contacts.0)?;
+                let view = cg::periodic::LabView::of(&self.simulation);
+                if fields.spec.records {
+                    samples::write(dir, &view, &contacts.0)?;
+                }
+                fields.add(&view, &contacts.0)?;
             } else {
                 self.simulation.step(row)?;
             }
@@ -538,13 +547,8 @@ impl Run {
         let path = dir.join("snapshots.pvd");
         write_atomic(&path, vtk::collection_pvd(&self.snapshots).as_bytes())
             .map_err(io_err("write", &path))?;
-        if let Some((grid, points)) = self.fields.as_ref().and_then(BoxFields::points) {
-            let path = dir.join("fields.csv");
-            write_atomic(&path, cg::output::to_csv(grid, &points).as_bytes())
-                .map_err(io_err("write", &path))?;
-            let path = dir.join("fields.vti");
-            write_atomic(&path, cg::output::to_vti(grid, &points).as_bytes())
-                .map_err(io_err("write", &path))?;
+        if let Some(fields) = &self.fields {
+            write_fields(fields, dir)?;
         }
         self.write_summary(dir, status, error)
     }
@@ -582,6 +586,23 @@ impl Run {
         let json = serde_json::to_string_pretty(&summary).unwrap_or_default();
         write_atomic(&path, json.as_bytes()).map_err(io_err("write", &path))
     }
+}
+
+/// Writes the time-averaged `fields` as `fields.csv` and `fields.vti` into `dir`; nothing
+/// before their first sample.
+///
+/// # Errors
+/// [`RunError::Io`] when a file cannot be written.
+pub fn write_fields(fields: &BoxFields, dir: &Path) -> Result<(), RunError> {
+    if let Some((grid, points)) = fields.points() {
+        let path = dir.join("fields.csv");
+        write_atomic(&path, cg::output::to_csv(grid, &points).as_bytes())
+            .map_err(io_err("write", &path))?;
+        let path = dir.join("fields.vti");
+        write_atomic(&path, cg::output::to_vti(grid, &points).as_bytes())
+            .map_err(io_err("write", &path))?;
+    }
+    Ok(())
 }
 
 /// Removes the snapshot files (`particles_*.vtp`) of an earlier run from `snapshots`.

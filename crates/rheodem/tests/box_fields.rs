@@ -1,12 +1,13 @@
 //! Coarse-grained fields of the shear box, sampled on the fly by a run
 //! (docs/coarse-graining.md §7): the slabs integrate to the box's own measurements at the
 //! same rows, a run killed and resumed gives the same sums as one run straight through,
-//! and the lab and affine-drag descriptions of one state give the same fields.
+//! the lab and affine-drag descriptions of one state give the same fields, and the stored
+//! samples coarse-grained afterwards give the run's own fields.
 
-use rheodem::cg::periodic::{BoxFields, snapshot};
+use rheodem::cg::periodic::{BoxFields, LabView, snapshot};
 use rheodem::cg::{CgSums, ContactRecords, Kernel, fields};
 use rheodem::domain::ShearDynamics;
-use rheodem::run::Run;
+use rheodem::run::{Run, samples};
 use rheodem::scenario::{Scenario, build};
 use rheodem::setups::shear_box::{ShearBoxSpec, SlabRates};
 use std::path::{Path, PathBuf};
@@ -151,8 +152,8 @@ fn lab_and_affine_drag_descriptions_of_a_state_give_the_same_fields() {
     let box_fields = BoxFields::new(scenario.fields.as_ref().expect("fields")).expect("fields");
     let grid = box_fields.grid(&lab.domain).expect("grid");
     let (s_lab, s_affine) = (
-        snapshot(&lab, &contacts, &grid),
-        snapshot(&affine, &contacts, &grid),
+        snapshot(&LabView::of(&lab), &contacts, &grid),
+        snapshot(&LabView::of(&affine), &contacts, &grid),
     );
     assert_eq!(s_lab.images.len(), 2, "the two images along y");
     for (a, b) in s_lab.images.iter().zip(&s_affine.images) {
@@ -171,5 +172,67 @@ fn lab_and_affine_drag_descriptions_of_a_state_give_the_same_fields() {
     for (a, b) in field(&s_lab).iter().zip(&field(&s_affine)) {
         assert!((a.velocity[0] - b.velocity[0]).abs() <= 1e-9 * a.velocity[0].abs().max(1e-6));
         assert!((a.strain_rate / b.strain_rate - 1.0).abs() < 1e-9);
+    }
+}
+
+/// A run that stores its samples (`cg_records`), killed in its averaging window and
+/// resumed, coarse-grained afterwards from them gives its own on-the-fly fields bit for
+/// bit (affine drag, so that the stored lab-frame view is exercised); with a wider kernel
+/// the same samples keep the box's mass; a run without samples is refused by name.
+#[test]
+fn stored_samples_coarse_grained_afterwards_give_the_run_s_fields() {
+    let mut box_spec = spec("affine-drag");
+    box_spec.cg_records = true;
+    let scenario = box_spec.scenario().expect("scenario");
+    let dir = temp_dir("records");
+    let steps = Run::start(scenario.clone(), Path::new("."), &dir, 1, true)
+        .expect("start")
+        .plan
+        .steps;
+    let done = run(scenario, &dir, Some(steps * 3 / 4));
+    let on_the_fly = done.fields.as_ref().expect("fields");
+    let read = samples::read_run(&dir).expect("read");
+    let offline = samples::offline_fields(&dir, &read, &on_the_fly.spec).expect("offline");
+    assert_eq!(
+        offline.sums, on_the_fly.sums,
+        "offline sums equal the run's"
+    );
+
+    let mut wide = on_the_fly.spec.clone();
+    wide.width *= 2.0;
+    let wider = samples::offline_fields(&dir, &read, &wide).expect("wider");
+    let (_, narrow_points) = on_the_fly.points().expect("points");
+    let (_, wide_points) = wider.points().expect("points");
+    let mean_phi = |p: &[rheodem::cg::FieldPoint]| {
+        p.iter().map(|q| q.volume_fraction).sum::<f64>() / p.len() as f64
+    };
+    // The grid is laid over the box of the first sample; the stress control changes `L_y`
+    // afterwards, and the slab means of φ then differ between kernels by up to the
+    // relative change of `L_y` over the window.
+    let start = on_the_fly.spec.start;
+    let heights: Vec<f64> = done
+        .rows
+        .iter()
+        .filter(|r| r.time >= start)
+        .map(|r| r.box_size[1])
+        .collect();
+    let spread = heights
+        .iter()
+        .fold(0.0f64, |m, &h| m.max((h / heights[0] - 1.0).abs()));
+    let (a, b) = (mean_phi(&narrow_points), mean_phi(&wide_points));
+    eprintln!("mean φ {a} and {b}; L_y spread {spread:e}");
+    assert!(
+        (a / b - 1.0).abs() <= spread.max(1e-6),
+        "mean φ {a} against {b} with the wider kernel (L_y changed by {spread:e})"
+    );
+
+    let plain = temp_dir("no-records");
+    run(spec("lab").scenario().expect("scenario"), &plain, None);
+    let read = samples::read_run(&plain).expect("read");
+    let spec = read.fields.as_ref().expect("fields").spec.clone();
+    let err = samples::offline_fields(&plain, &read, &spec).expect_err("no samples");
+    assert!(err.to_string().contains("no stored samples"), "{err}");
+    for d in [dir, plain] {
+        let _ = std::fs::remove_dir_all(d);
     }
 }

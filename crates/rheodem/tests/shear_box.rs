@@ -355,6 +355,15 @@ fn invalid_inputs_name_their_key() {
                 ..ok.clone()
             },
         ),
+        (
+            // samples of fields that are not computed
+            "cg_records",
+            ShearBoxSpec {
+                cg_records: true,
+                cg_slabs: 0,
+                ..ok.clone()
+            },
+        ),
     ];
     for (key, s) in cases {
         let err = s.derive().expect_err(key);

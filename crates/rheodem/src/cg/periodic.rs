@@ -129,22 +129,20 @@ impl BoxFields {
         Ok(grid)
     }
 
-    /// Adds the state of `sim` after a measured step, with that step's `contacts`. The grid
-    /// is the box's at the first sample; a box that changes size later (stress control) is
-    /// still covered through its periodic images.
+    /// Adds a sample: the lab view of a measured state with that step's `contacts`. The
+    /// grid is the box's at the first sample; a box that changes size later (stress
+    /// control) is still covered through its periodic images.
     ///
     /// # Errors
     /// [`CgError::Invalid`] for a grid too large.
-    pub fn sample(&mut self, sim: &Simulation, contacts: &[ContactRecord]) -> Result<(), CgError> {
+    pub fn add(&mut self, view: &LabView, contacts: &[ContactRecord]) -> Result<(), CgError> {
         if self.sums.is_none() {
-            self.sums = Some(CgSums::new(self.grid(&sim.domain)?)?);
+            self.sums = Some(CgSums::new(self.grid(&view.domain)?)?);
         }
         let kernel = Kernel::new(self.spec.kernel, self.spec.width)?;
-        let snap = snapshot(sim, contacts, &self.sums.as_ref().expect("made").grid);
-        self.sums
-            .as_mut()
-            .expect("made")
-            .add_snapshot(&kernel, &snap);
+        let sums = self.sums.as_mut().expect("made");
+        let snap = snapshot(view, contacts, &sums.grid);
+        sums.add_snapshot(&kernel, &snap);
         Ok(())
     }
 
@@ -155,19 +153,49 @@ impl BoxFields {
     }
 }
 
-/// The snapshot of `sim` for `grid`: lab-frame velocities (under affine drag the stored
-/// ones exclude the mean flow, which is added back), and images that carry the
-/// Lees-Edwards velocity jump of the lab frame, so that the velocity field is continuous
-/// through the sheared boundary.
-pub fn snapshot(sim: &Simulation, contacts: &[ContactRecord], grid: &Grid) -> Snapshot {
-    let domain = &sim.domain;
-    let mut records = ParticleRecord::all(&sim.particles);
-    for r in &mut records {
-        r.velocity = domain.lab_velocity(r.position, r.velocity);
+/// A state of a periodic box as its fields see it, the same in every shear dynamics: the
+/// time (s), the box with lab-frame Lees-Edwards boundaries, and the particles with
+/// lab-frame velocities (under affine drag the stored ones exclude the mean flow, which is
+/// added back). This is what a sample stores (see [`crate::cg::samples`]).
+#[derive(Clone, Debug, PartialEq)]
+pub struct LabView {
+    /// Step of the state.
+    pub step: u64,
+    /// Time (s).
+    pub time: f64,
+    /// The box, its Lees-Edwards boundaries (if any) in the lab frame.
+    pub domain: Domain,
+    /// The particles, velocities in the lab frame (m/s).
+    pub particles: Vec<ParticleRecord>,
+}
+
+impl LabView {
+    /// The lab view of `sim`.
+    pub fn of(sim: &Simulation) -> LabView {
+        let mut domain = sim.domain.clone();
+        let mut particles = ParticleRecord::all(&sim.particles);
+        for r in &mut particles {
+            r.velocity = sim.domain.lab_velocity(r.position, r.velocity);
+        }
+        if let Some(le) = &mut domain.lees_edwards {
+            le.dynamics = ShearDynamics::Lab;
+        }
+        LabView {
+            step: sim.step,
+            time: sim.time,
+            domain,
+            particles,
+        }
     }
-    let mut lab = domain.clone();
-    if let Some(le) = &mut lab.lees_edwards {
-        le.dynamics = ShearDynamics::Lab;
-    }
-    Snapshot::assemble(sim.time, &records, contacts, images_for(&lab, grid))
+}
+
+/// The snapshot of `view` for `grid`, with images that carry the lab frame's Lees-Edwards
+/// velocity jump, so that the velocity field is continuous through the sheared boundary.
+pub fn snapshot(view: &LabView, contacts: &[ContactRecord], grid: &Grid) -> Snapshot {
+    Snapshot::assemble(
+        view.time,
+        &view.particles,
+        contacts,
+        images_for(&view.domain, grid),
+    )
 }

@@ -96,6 +96,11 @@ pub struct FieldsSpec {
     /// fields are `NaN`.
     #[serde(default)]
     pub material: Option<crate::cg::Material>,
+    /// Whether every sample's particles, contacts and box are also stored under
+    /// `fields/`, so that `rheodem cg` can coarse-grain the run again with another kernel,
+    /// width or grid (about 0.3 kB per particle and per sample); default false.
+    #[serde(default)]
+    pub records: bool,
 }
 
 /// The grid of [`FieldsSpec`].

@@ -157,6 +157,10 @@ pub struct ShearBoxSpec {
     /// Kernel width of the fields in mean diameters (default 1).
     #[serde(default = "default_cg_width")]
     pub cg_width: f64,
+    /// Whether the fields' samples are also stored (particles, contacts and box, under
+    /// `fields/`) for `rheodem cg` to coarse-grain again; needs `cg_slabs` > 0.
+    #[serde(default)]
+    pub cg_records: bool,
 }
 
 fn default_cg_kernel() -> KernelShape {
@@ -276,6 +280,13 @@ impl ShearBoxSpec {
                 "cg_slabs",
                 self.cg_slabs,
                 "must lie in [0, 100000]",
+            ));
+        }
+        if self.cg_records && self.cg_slabs == 0 {
+            return Err(invalid(
+                "cg_records",
+                true,
+                "stores the fields' samples: it needs cg_slabs > 0",
             ));
         }
         if bo > 0.0 && self.cohesion == Cohesion::None {
@@ -451,6 +462,7 @@ impl ShearBoxSpec {
                     stiffness: self.stiffness,
                     max_adhesion: dv.max_force,
                 }),
+                records: self.cg_records,
             }),
         })
     }

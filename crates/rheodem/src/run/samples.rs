@@ -1,0 +1,168 @@
+//! The stored samples of a run's fields (`[fields] records = true`; docs/coarse-graining.md
+//! §9): under `fields/` of the run directory, each sample of step `N` is three files,
+//! `sample_N.particles.csv` and `sample_N.contacts.csv` (the records of the snapshot files,
+//! every number written to read back exactly) and `sample_N.box.json` (step, time and the
+//! box with lab-frame boundaries). [`offline_fields`] reads them back and coarse-grains the
+//! run again, with the run's settings or others: the same samples with the same settings
+//! give the fields of the run to the bit.
+
+use super::{Run, RunError, io_err, read_checkpoint};
+use crate::cg::periodic::{BoxFields, LabView};
+use crate::cg::snapshot::{contacts_csv, particles_csv, read_contacts_csv, read_particles_csv};
+use crate::cg::{CgError, ContactRecord};
+use crate::domain::Domain;
+use crate::io::atomic::write_atomic;
+use crate::scenario::spec::FieldsSpec;
+use serde::{Deserialize, Serialize};
+use std::path::{Path, PathBuf};
+
+/// The samples' directory within a run directory.
+pub const SAMPLES_DIR: &str = "fields";
+
+/// What `sample_N.box.json` holds.
+#[derive(Serialize, Deserialize)]
+struct SampleBox {
+    step: u64,
+    time: f64,
+    domain: Domain,
+}
+
+/// The path of sample `step`'s file with `suffix` (`particles.csv`, `contacts.csv`,
+/// `box.json`) in the run directory `dir`.
+fn sample_path(dir: &Path, step: u64, suffix: &str) -> PathBuf {
+    dir.join(SAMPLES_DIR)
+        .join(format!("sample_{step:010}.{suffix}"))
+}
+
+/// Stores a sample of the run in `dir`: the lab view of a measured state with its step's
+/// contacts. The box file is written last, so a sample counts only once complete.
+///
+/// # Errors
+/// [`RunError::Io`] when a file cannot be written.
+pub fn write(dir: &Path, view: &LabView, contacts: &[ContactRecord]) -> Result<(), RunError> {
+    let folder = dir.join(SAMPLES_DIR);
+    std::fs::create_dir_all(&folder).map_err(io_err("create the directory", &folder))?;
+    let header = SampleBox {
+        step: view.step,
+        time: view.time,
+        domain: view.domain.clone(),
+    };
+    let json = serde_json::to_string(&header).unwrap_or_default();
+    for (suffix, text) in [
+        ("particles.csv", particles_csv(&view.particles)),
+        ("contacts.csv", contacts_csv(contacts)),
+        ("box.json", json),
+    ] {
+        let path = sample_path(dir, view.step, suffix);
+        write_atomic(&path, text.as_bytes()).map_err(io_err("write", &path))?;
+    }
+    Ok(())
+}
+
+/// Removes the samples of an earlier run from `dir`.
+///
+/// # Errors
+/// [`RunError::Io`] when a sample file cannot be removed.
+pub fn remove_all(dir: &Path) -> Result<(), RunError> {
+    for (_, stem) in list(dir)? {
+        for suffix in ["particles.csv", "contacts.csv", "box.json"] {
+            let path = stem.with_extension(suffix);
+            if path.exists() {
+                std::fs::remove_file(&path).map_err(io_err("remove", &path))?;
+            }
+        }
+    }
+    Ok(())
+}
+
+/// The complete samples in `dir` (those with a box file), as `(step, path stem)` in step
+/// order; none when the directory has no `fields/`.
+fn list(dir: &Path) -> Result<Vec<(u64, PathBuf)>, RunError> {
+    let folder = dir.join(SAMPLES_DIR);
+    let Ok(entries) = std::fs::read_dir(&folder) else {
+        return Ok(Vec::new());
+    };
+    let mut found = Vec::new();
+    for entry in entries {
+        let entry = entry.map_err(io_err("list", &folder))?;
+        let name = entry.file_name();
+        let Some(step) = name
+            .to_str()
+            .and_then(|n| n.strip_prefix("sample_"))
+            .and_then(|n| n.strip_suffix(".box.json"))
+            .and_then(|n| n.parse::<u64>().ok())
+        else {
+            continue;
+        };
+        found.push((step, folder.join(format!("sample_{step:010}"))));
+    }
+    found.sort_unstable();
+    Ok(found)
+}
+
+/// Reads sample `step` of the run in `dir`.
+fn read(dir: &Path, step: u64) -> Result<(LabView, Vec<ContactRecord>), RunError> {
+    let text = |suffix: &str| {
+        let path = sample_path(dir, step, suffix);
+        std::fs::read_to_string(&path)
+            .map(|t| (t, path.display().to_string()))
+            .map_err(io_err("read", &sample_path(dir, step, suffix)))
+    };
+    let (json, what) = text("box.json")?;
+    let header: SampleBox = serde_json::from_str(&json)
+        .map_err(|e| CgError::Invalid(format!("{what}: not a sample's box file: {e}")))?;
+    let (csv, what) = text("particles.csv")?;
+    let particles = read_particles_csv(&csv, &what)?;
+    let (csv, what) = text("contacts.csv")?;
+    let contacts = read_contacts_csv(&csv, &what)?;
+    Ok((
+        LabView {
+            step: header.step,
+            time: header.time,
+            domain: header.domain,
+            particles,
+        },
+        contacts,
+    ))
+}
+
+/// The run in `dir` as of its last checkpoint, read without locking or changing the
+/// directory.
+///
+/// # Errors
+/// [`RunError`] when the checkpoint cannot be read.
+pub fn read_run(dir: &Path) -> Result<Run, RunError> {
+    read_checkpoint(&dir.join("checkpoint.bin"))
+}
+
+/// The fields of `run` (read from `dir` by [`read_run`]) coarse-grained again from its
+/// stored samples with `spec`: the samples from `spec.start` up to the last checkpoint, in
+/// step order.
+///
+/// # Errors
+/// [`RunError`] when a sample cannot be read, there is none to use, or `spec` is out of
+/// range.
+pub fn offline_fields(dir: &Path, run: &Run, spec: &FieldsSpec) -> Result<BoxFields, RunError> {
+    let mut fields = BoxFields::new(spec)?;
+    let mut used = 0;
+    for (step, _) in list(dir)? {
+        if step > run.simulation.step {
+            break;
+        }
+        let (view, contacts) = read(dir, step)?;
+        if fields.wants(view.time) {
+            fields.add(&view, &contacts)?;
+            used += 1;
+        }
+    }
+    if used == 0 {
+        return Err(CgError::Invalid(format!(
+            "{}: no stored samples from t = {} s up to the last checkpoint (a run stores them \
+             with `records = true` in [fields], the shear box with `cg_records`)",
+            dir.display(),
+            spec.start
+        ))
+        .into());
+    }
+    Ok(fields)
+}
