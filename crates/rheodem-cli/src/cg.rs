@@ -35,8 +35,9 @@ pub struct CgArgs {
     /// Where to write fields.csv and fields.vti (default: DIR/cg).
     #[arg(long, short)]
     out: Option<PathBuf>,
-    /// Also write the snapshots of the averaging window in MercuryDPM's formats
-    /// (mercury.data and mercury.fstat in the output directory), for MercuryCG.
+    /// Also write the snapshots of the averaging window (a box run: the samples from its
+    /// `start`) in MercuryDPM's formats (mercury.data and mercury.fstat in the output
+    /// directory), for MercuryCG.
     #[arg(long)]
     mercury: bool,
 }
@@ -111,11 +112,6 @@ pub fn run(args: CgArgs) -> Result<()> {
 
 /// `rheodem cg` for a periodic-box run: its fields again from its stored samples.
 fn box_run(args: &CgArgs) -> Result<()> {
-    anyhow::ensure!(
-        !args.mercury,
-        "--mercury exports split-bottom runs; {} is a periodic-box run",
-        args.dir.display()
-    );
     let dir: &Path = &args.dir;
     let run = samples::read_run(dir)
         .with_context(|| format!("cannot read the run in {}", dir.display()))?;
@@ -172,5 +168,13 @@ fn box_run(args: &CgArgs) -> Result<()> {
         spec.width,
         out.join("fields.csv").display()
     );
+    if args.mercury {
+        let n = samples::export_mercury(dir, &run, spec.start, &out)?;
+        println!(
+            "{n} samples in MercuryDPM's formats: {} and {}",
+            out.join("mercury.data").display(),
+            out.join("mercury.fstat").display()
+        );
+    }
     Ok(())
 }

@@ -132,7 +132,8 @@ fn run_writes_its_outputs_and_resume_sees_it_complete() {
 
 /// A shear box that stores its fields' samples is coarse-grained again by `rheodem cg`:
 /// with its own settings the file equals the run's `fields.csv`, with another slab count
-/// it has that many rows; a run without samples and a box run with `--mercury` are refused.
+/// it has that many rows, and `--mercury` exports the samples; a run without samples is
+/// refused.
 #[test]
 fn cg_coarse_grains_a_shear_box_again_from_its_samples() {
     let dir = temp("cg-box");
@@ -195,9 +196,28 @@ fn cg_coarse_grains_a_shear_box_again_from_its_samples() {
     );
     let rows = read(again.join("fields.csv")).lines().count() - 1;
     assert!((10..=16).contains(&rows), "{rows} slabs of half a diameter");
-    let out = rheodem(&["cg", &dir_s, "--mercury"]);
-    assert!(!out.status.success());
-    assert!(String::from_utf8_lossy(&out.stderr).contains("--mercury"));
+    let out = rheodem(&["cg", &dir_s, "--mercury", "--out", &again.to_string_lossy()]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let data = read(again.join("mercury.data"));
+    let blocks = data
+        .lines()
+        .filter(|l| l.split_whitespace().count() == 8)
+        .count();
+    let samples = std::fs::read_dir(dir.join("fields"))
+        .expect("samples")
+        .filter(|e| {
+            e.as_ref()
+                .is_ok_and(|e| e.file_name().to_string_lossy().ends_with(".box.json"))
+        })
+        .count();
+    assert!(
+        blocks > 0 && blocks == samples,
+        "{blocks} blocks of {samples} samples"
+    );
     let out = rheodem(&["cg", &dir_s, "--width=-1"]);
     assert!(String::from_utf8_lossy(&out.stderr).contains("--width"));
     std::fs::remove_dir_all(dir.join("fields")).expect("remove the samples");

@@ -135,6 +135,31 @@ pub fn read_run(dir: &Path) -> Result<Run, RunError> {
     read_checkpoint(&dir.join("checkpoint.bin"))
 }
 
+/// The stored samples of `run` (read from `dir` by [`read_run`]) from time `start` (s) up
+/// to its last checkpoint, in step order, read one at a time.
+fn window<'a>(
+    dir: &'a Path,
+    run: &'a Run,
+    start: f64,
+) -> Result<impl Iterator<Item = Result<(LabView, Vec<ContactRecord>), RunError>> + 'a, RunError> {
+    let steps = list(dir)?;
+    Ok(steps
+        .into_iter()
+        .take_while(|&(step, _)| step <= run.simulation.step)
+        .map(move |(step, _)| read(dir, step))
+        .filter(move |sample| sample.as_ref().map_or(true, |(view, _)| view.time >= start)))
+}
+
+/// The error of a window without samples.
+fn no_samples(dir: &Path, start: f64) -> RunError {
+    CgError::Invalid(format!(
+        "{}: no stored samples from t = {start} s up to the last checkpoint (a run stores them \
+         with `records = true` in [fields], the shear box with `cg_records`)",
+        dir.display()
+    ))
+    .into()
+}
+
 /// The fields of `run` (read from `dir` by [`read_run`]) coarse-grained again from its
 /// stored samples with `spec`: the samples from `spec.start` up to the last checkpoint, in
 /// step order.
@@ -144,25 +169,37 @@ pub fn read_run(dir: &Path) -> Result<Run, RunError> {
 /// range.
 pub fn offline_fields(dir: &Path, run: &Run, spec: &FieldsSpec) -> Result<BoxFields, RunError> {
     let mut fields = BoxFields::new(spec)?;
-    let mut used = 0;
-    for (step, _) in list(dir)? {
-        if step > run.simulation.step {
-            break;
-        }
-        let (view, contacts) = read(dir, step)?;
-        if fields.wants(view.time) {
-            fields.add(&view, &contacts)?;
-            used += 1;
-        }
+    for sample in window(dir, run, spec.start)? {
+        let (view, contacts) = sample?;
+        fields.add(&view, &contacts)?;
     }
-    if used == 0 {
-        return Err(CgError::Invalid(format!(
-            "{}: no stored samples from t = {} s up to the last checkpoint (a run stores them \
-             with `records = true` in [fields], the shear box with `cg_records`)",
-            dir.display(),
-            spec.start
-        ))
-        .into());
+    if fields.sums.is_none() {
+        return Err(no_samples(dir, spec.start));
     }
     Ok(fields)
+}
+
+/// Writes `mercury.data` and `mercury.fstat` into `out`: the stored samples of `run` from
+/// time `start` (s) in MercuryDPM's formats ([`crate::cg::mercury`]; positions wrapped into
+/// the box, velocities in the lab frame); returns how many.
+///
+/// # Errors
+/// [`RunError`] when a sample cannot be read or exported, there is none, or a file cannot
+/// be written.
+pub fn export_mercury(dir: &Path, run: &Run, start: f64, out: &Path) -> Result<usize, RunError> {
+    let (mut data, mut fstat, mut count) = (String::new(), String::new(), 0);
+    for sample in window(dir, run, start)? {
+        let (view, contacts) = sample?;
+        crate::cg::mercury::data_block(&mut data, view.time, &view.particles)?;
+        crate::cg::mercury::fstat_block(&mut fstat, view.time, &view.particles, &contacts)?;
+        count += 1;
+    }
+    if count == 0 {
+        return Err(no_samples(dir, start));
+    }
+    for (name, text) in [("mercury.data", data), ("mercury.fstat", fstat)] {
+        let path = out.join(name);
+        write_atomic(&path, text.as_bytes()).map_err(io_err("write", &path))?;
+    }
+    Ok(count)
 }
