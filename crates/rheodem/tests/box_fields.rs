@@ -178,7 +178,8 @@ fn lab_and_affine_drag_descriptions_of_a_state_give_the_same_fields() {
 /// A run that stores its samples (`cg_records`), killed in its averaging window and
 /// resumed, coarse-grained afterwards from them gives its own on-the-fly fields bit for
 /// bit (affine drag, so that the stored lab-frame view is exercised); with a wider kernel
-/// the same samples keep the box's mass; a run without samples is refused by name.
+/// the same samples keep the box's mass; starting over removes them; a run without samples
+/// is refused by name.
 #[test]
 fn stored_samples_coarse_grained_afterwards_give_the_run_s_fields() {
     let mut box_spec = spec("affine-drag");
@@ -189,7 +190,7 @@ fn stored_samples_coarse_grained_afterwards_give_the_run_s_fields() {
         .expect("start")
         .plan
         .steps;
-    let done = run(scenario, &dir, Some(steps * 3 / 4));
+    let done = run(scenario.clone(), &dir, Some(steps * 3 / 4));
     let on_the_fly = done.fields.as_ref().expect("fields");
     let read = samples::read_run(&dir).expect("read");
     let offline = samples::offline_fields(&dir, &read, &on_the_fly.spec).expect("offline");
@@ -225,6 +226,14 @@ fn stored_samples_coarse_grained_afterwards_give_the_run_s_fields() {
         (a / b - 1.0).abs() <= spread.max(1e-6),
         "mean φ {a} against {b} with the wider kernel (L_y changed by {spread:e})"
     );
+
+    // Starting over removes the earlier run's samples.
+    drop(done);
+    drop(Run::start(scenario, Path::new("."), &dir, 1, true).expect("start over"));
+    let left = std::fs::read_dir(dir.join(samples::SAMPLES_DIR))
+        .expect("samples' directory")
+        .count();
+    assert_eq!(left, 0, "samples left from the earlier run");
 
     let plain = temp_dir("no-records");
     run(spec("lab").scenario().expect("scenario"), &plain, None);

@@ -59,45 +59,48 @@ pub fn write(dir: &Path, view: &LabView, contacts: &[ContactRecord]) -> Result<(
     Ok(())
 }
 
-/// Removes the samples of an earlier run from `dir`.
+/// Removes the samples of an earlier run from `dir`, complete or not.
 ///
 /// # Errors
 /// [`RunError::Io`] when a sample file cannot be removed.
 pub fn remove_all(dir: &Path) -> Result<(), RunError> {
-    for (_, stem) in list(dir)? {
-        for suffix in ["particles.csv", "contacts.csv", "box.json"] {
-            let path = stem.with_extension(suffix);
-            if path.exists() {
-                std::fs::remove_file(&path).map_err(io_err("remove", &path))?;
-            }
-        }
+    for path in sample_files(dir)? {
+        std::fs::remove_file(&path).map_err(io_err("remove", &path))?;
     }
     Ok(())
 }
 
-/// The complete samples in `dir` (those with a box file), as `(step, path stem)` in step
-/// order; none when the directory has no `fields/`.
-fn list(dir: &Path) -> Result<Vec<(u64, PathBuf)>, RunError> {
+/// Every file named `sample_*` in the samples' directory of `dir` (none without one).
+fn sample_files(dir: &Path) -> Result<Vec<PathBuf>, RunError> {
     let folder = dir.join(SAMPLES_DIR);
     let Ok(entries) = std::fs::read_dir(&folder) else {
         return Ok(Vec::new());
     };
-    let mut found = Vec::new();
+    let mut files = Vec::new();
     for entry in entries {
         let entry = entry.map_err(io_err("list", &folder))?;
-        let name = entry.file_name();
-        let Some(step) = name
-            .to_str()
-            .and_then(|n| n.strip_prefix("sample_"))
-            .and_then(|n| n.strip_suffix(".box.json"))
-            .and_then(|n| n.parse::<u64>().ok())
-        else {
-            continue;
-        };
-        found.push((step, folder.join(format!("sample_{step:010}"))));
+        if entry.file_name().to_string_lossy().starts_with("sample_") {
+            files.push(entry.path());
+        }
     }
-    found.sort_unstable();
-    Ok(found)
+    Ok(files)
+}
+
+/// The steps of the complete samples in `dir` (those with a box file), in order.
+fn list(dir: &Path) -> Result<Vec<u64>, RunError> {
+    let mut steps: Vec<u64> = sample_files(dir)?
+        .iter()
+        .filter_map(|p| {
+            p.file_name()?
+                .to_str()?
+                .strip_prefix("sample_")?
+                .strip_suffix(".box.json")?
+                .parse()
+                .ok()
+        })
+        .collect();
+    steps.sort_unstable();
+    Ok(steps)
 }
 
 /// Reads sample `step` of the run in `dir`.
@@ -145,8 +148,8 @@ fn window<'a>(
     let steps = list(dir)?;
     Ok(steps
         .into_iter()
-        .take_while(|&(step, _)| step <= run.simulation.step)
-        .map(move |(step, _)| read(dir, step))
+        .take_while(|&step| step <= run.simulation.step)
+        .map(move |step| read(dir, step))
         .filter(move |sample| sample.as_ref().map_or(true, |(view, _)| view.time >= start)))
 }
 
