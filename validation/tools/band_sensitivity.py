@@ -10,6 +10,11 @@ stress invariant or the stress resolved on the flow. Prints mu, c and c* = c d_p
 P_min = 99.9 Pa, invariant) is the row marked *; its fit in summary.json is weighted by
 the points' errors, so it differs from this one in the last digits.
 
+A second table asks whether the band's inertial number makes the intercept: at rheodem's
+band it fits tau = mu P + c only over the points with I <= I_max, and fits
+tau = (mu + b I) P + c, a friction rising linearly with the local inertial number, over all
+of them.
+
 Usage: python3 validation/tools/band_sensitivity.py RUN_DIR...   (standard library only)
 """
 import csv
@@ -29,7 +34,29 @@ def fit(points):
     return mu, (sy - mu * sx) / n
 
 
-def band(rows, threshold, p_min, tau):
+def solve(a, b):
+    """Solves the small linear system a x = b by Gaussian elimination with pivoting."""
+    n = len(b)
+    m = [row[:] + [b[k]] for k, row in enumerate(a)]
+    for col in range(n):
+        piv = max(range(col, n), key=lambda r: abs(m[r][col]))
+        m[col], m[piv] = m[piv], m[col]
+        for r in range(n):
+            if r != col:
+                f = m[r][col] / m[col][col]
+                m[r] = [x - f * y for x, y in zip(m[r], m[col])]
+    return [m[k][n] / m[k][k] for k in range(n)]
+
+
+def fit_rate(points):
+    """tau = mu P + b I P + c by least squares over (P, I, tau); returns mu, b, c."""
+    cols = [(p, i * p, 1.0) for p, i, _ in points]
+    a = [[sum(c[j] * c[k] for c in cols) for k in range(3)] for j in range(3)]
+    rhs = [sum(c[j] * t for c, (_, _, t) in zip(cols, points)) for j in range(3)]
+    return solve(a, rhs)
+
+
+def band(rows, threshold, p_min, tau, extra=None):
     by_height = {}
     for r in rows:
         if not math.isnan(r["strain_rate"]):
@@ -37,7 +64,8 @@ def band(rows, threshold, p_min, tau):
     points = []
     for level in by_height.values():
         top = max(r["strain_rate"] for r in level)
-        points += [(r["pressure"], r[tau]) for r in level
+        points += [(r["pressure"], r[tau]) if extra is None else (r["pressure"], r[extra], r[tau])
+                   for r in level
                    if r["strain_rate"] >= threshold * top and r["pressure"] >= p_min]
     return points
 
@@ -53,3 +81,15 @@ for run in sys.argv[1:]:
                 mu, c = fit(pts)
                 mark = " *" if (threshold, p_min, name) == (0.8, 99.9, "invariant") else ""
                 print(f"| {threshold}{mark} | {p_min} | {name} | {len(pts)} | {mu:.4f} | {c:.2f} | {c * D_P**2 / F_G:.3f} |")
+    pts = band(rows, 0.8, 99.9, "shear_stress", "inertial_number")
+    inertial = sorted(i for _, i, _ in pts)
+    print(f"\nrate (X = 0.8, P_min = 99.9 Pa, invariant; band I from {inertial[0]:.2e}, "
+          f"median {inertial[len(inertial) // 2]:.2e}, to {inertial[-1]:.2e})\n")
+    print("| fit | points | mu | b | c (Pa) | c* |\n|---|---|---|---|---|---|")
+    for i_max in (math.inf, 0.02, 0.01, 0.005):
+        kept = [(p, t) for p, i, t in pts if i <= i_max]
+        if len(kept) > 10:
+            mu, c = fit(kept)
+            print(f"| I <= {i_max} | {len(kept)} | {mu:.4f} | | {c:.2f} | {c * D_P**2 / F_G:.3f} |")
+    mu, b, c = fit_rate(pts)
+    print(f"| (mu + b I) P + c | {len(pts)} | {mu:.4f} | {b:.3f} | {c:.2f} | {c * D_P**2 / F_G:.3f} |")
