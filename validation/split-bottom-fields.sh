@@ -69,6 +69,6 @@ for spec in "dry:dry" "wet-g0.02-v75:willett:0.02:75" "wet-g0.02-v14:willett:0.0
         "$B" split-bottom --time-step mean-pair --seed "$a" --duration 0.01 --average-from 0 \
           --out "$V/settled-seed$a" --quiet
       fi
-      FROM=$V/settled-seed$a run "$name" $(wet "$b") ;;
+      FROM=$V/settled-seed$a run "$name" --seed "$a" $(wet "$b") ;;
   esac
 done

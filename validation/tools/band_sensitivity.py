@@ -70,26 +70,31 @@ def band(rows, threshold, p_min, tau, extra=None):
     return points
 
 
-for run in sys.argv[1:]:
-    with open(f"{run}/fields.csv") as f:
-        rows = [{k: float(v) for k, v in r.items()} for r in csv.DictReader(f)]
-    print(f"\n{run}\n\n| X | P_min (Pa) | tau | points | mu | c (Pa) | c* |\n|---|---|---|---|---|---|---|")
-    for threshold in (0.5, 0.6, 0.7, 0.8, 0.9):
-        for p_min in (50.0, 99.9, 200.0):
-            for tau, name in (("shear_stress", "invariant"), ("resolved_shear_stress", "resolved")):
-                pts = band(rows, threshold, p_min, tau)
-                mu, c = fit(pts)
-                mark = " *" if (threshold, p_min, name) == (0.8, 99.9, "invariant") else ""
-                print(f"| {threshold}{mark} | {p_min} | {name} | {len(pts)} | {mu:.4f} | {c:.2f} | {c * D_P**2 / F_G:.3f} |")
-    pts = band(rows, 0.8, 99.9, "shear_stress", "inertial_number")
-    inertial = sorted(i for _, i, _ in pts)
-    print(f"\nrate (X = 0.8, P_min = 99.9 Pa, invariant; band I from {inertial[0]:.2e}, "
-          f"median {inertial[len(inertial) // 2]:.2e}, to {inertial[-1]:.2e})\n")
-    print("| fit | points | mu | b | c (Pa) | c* |\n|---|---|---|---|---|---|")
-    for i_max in (math.inf, 0.02, 0.01, 0.005):
-        kept = [(p, t) for p, i, t in pts if i <= i_max]
-        if len(kept) > 10:
-            mu, c = fit(kept)
-            print(f"| I <= {i_max} | {len(kept)} | {mu:.4f} | | {c:.2f} | {c * D_P**2 / F_G:.3f} |")
-    mu, b, c = fit_rate(pts)
-    print(f"| (mu + b I) P + c | {len(pts)} | {mu:.4f} | {b:.3f} | {c:.2f} | {c * D_P**2 / F_G:.3f} |")
+def main(runs):
+    for run in runs:
+        with open(f"{run}/fields.csv") as f:
+            rows = [{k: float(v) for k, v in r.items()} for r in csv.DictReader(f)]
+        print(f"\n{run}\n\n| X | P_min (Pa) | tau | points | mu | c (Pa) | c* |\n|---|---|---|---|---|---|---|")
+        for threshold in (0.5, 0.6, 0.7, 0.8, 0.9):
+            for p_min in (50.0, 99.9, 200.0):
+                for tau, name in (("shear_stress", "invariant"), ("resolved_shear_stress", "resolved")):
+                    pts = band(rows, threshold, p_min, tau)
+                    mu, c = fit(pts)
+                    mark = " *" if (threshold, p_min, name) == (0.8, 99.9, "invariant") else ""
+                    print(f"| {threshold}{mark} | {p_min} | {name} | {len(pts)} | {mu:.4f} | {c:.2f} | {c * D_P**2 / F_G:.3f} |")
+        pts = band(rows, 0.8, 99.9, "shear_stress", "inertial_number")
+        inertial = sorted(i for _, i, _ in pts)
+        print(f"\nrate (X = 0.8, P_min = 99.9 Pa, invariant; band I from {inertial[0]:.2e}, "
+              f"median {inertial[len(inertial) // 2]:.2e}, to {inertial[-1]:.2e})\n")
+        print("| fit | points | mu | b | c (Pa) | c* |\n|---|---|---|---|---|---|")
+        for i_max in (math.inf, 0.02, 0.01, 0.005):
+            kept = [(p, t) for p, i, t in pts if i <= i_max]
+            if len(kept) > 10:
+                mu, c = fit(kept)
+                print(f"| I <= {i_max} | {len(kept)} | {mu:.4f} | | {c:.2f} | {c * D_P**2 / F_G:.3f} |")
+        mu, b, c = fit_rate(pts)
+        print(f"| (mu + b I) P + c | {len(pts)} | {mu:.4f} | {b:.3f} | {c:.2f} | {c * D_P**2 / F_G:.3f} |")
+
+
+if __name__ == "__main__":
+    main(sys.argv[1:])
