@@ -9,19 +9,24 @@ cd "$(dirname "$0")/.."
 B=${1:-target/release/rheodem}
 shift || true
 V=validation/runs-split-bottom-fields
+# The checks (kernel width, other realisations) go apart: `rheodem wet-study` fits every run
+# of a directory.
+C=validation/runs-split-bottom-checks
 mkdir -p "$V"
 if [ ! -f "$V/settled/settled.bin" ]; then
   "$B" split-bottom --time-step mean-pair --duration 0.01 --average-from 0 --out "$V/settled" --quiet
 fi
 common=(--time-step mean-pair --quiet ${THREADS:+--threads "$THREADS"})
 # run NAME [OPTIONS…]: Ω, duration and averaging start from OMEGA, DURATION, AVERAGE_FROM,
-# the settled state from FROM (default: $V/settled); worker threads from THREADS (default: all).
+# the settled state from FROM (default: $V/settled), the run directory's parent from DEST
+# (default: $V); worker threads from THREADS (default: all).
 # A run that fails is reported and the next one goes on.
 run() {
-  local name=$1; shift; echo "== $name"
+  local name=$1 dest=${DEST:-$V}; shift; echo "== $name"
+  mkdir -p "$dest"
   "$B" split-bottom "${common[@]}" --from "${FROM:-$V/settled}" --omega "${OMEGA:-0.5}" --duration "${DURATION:-2.5}" \
-    --average-from "${AVERAGE_FROM:-1.0}" --out "$V/$name" "$@" 2>&1 | tee "$V/$name.log" \
-    || echo "== $name failed (see $V/$name.log)"
+    --average-from "${AVERAGE_FROM:-1.0}" --out "$dest/$name" "$@" 2>&1 | tee "$dest/$name.log" \
+    || echo "== $name failed (see $dest/$name.log)"
 }
 names=("$@")
 # wet dry|VOLUME_NL: the options of a dry run, or of a Willett bridge of that volume at 0.020 N/m.
@@ -32,7 +37,7 @@ wet() { [ "$1" = dry ] || echo "--law willett --surface-tension 0.02 --volume-nl
 # (s), same total rotation as the Ω = 0.5 runs, averaged over the same angle; gravity: a = g
 # (m/s²), from a state settled under that g; width: a = the kernel width cg_width (d_p), b = dry
 # or a Willett volume (nl) at 0.020 N/m; seed: a = the filling's seed, b as for width, from a
-# state settled from that filling.
+# state settled from that filling; both into $C.
 for spec in "dry:dry" "wet-g0.02-v75:willett:0.02:75" "wet-g0.02-v14:willett:0.02:14" \
             "wet-g0.02-v200:willett:0.02:200" "wet-g0.04-v75:willett:0.04:75" \
             "wet-g0.06-v75:willett:0.06:75" \
@@ -62,13 +67,14 @@ for spec in "dry:dry" "wet-g0.02-v75:willett:0.02:75" "wet-g0.02-v14:willett:0.0
                 --law willett --surface-tension 0.02 --volume-nl 75 ;;
     width)
       # The same settled state and run, coarse-grained with another kernel width.
-      printf 'cg_width = %s\n' "$a" > "$V/$name.toml"
-      run "$name" --config "$V/$name.toml" $(wet "$b") ;;
+      mkdir -p "$C"
+      printf 'cg_width = %s\n' "$a" > "$C/$name.toml"
+      DEST=$C run "$name" --config "$C/$name.toml" $(wet "$b") ;;
     seed)
       if [ ! -f "$V/settled-seed$a/settled.bin" ]; then
         "$B" split-bottom --time-step mean-pair --seed "$a" --duration 0.01 --average-from 0 \
           --out "$V/settled-seed$a" --quiet
       fi
-      FROM=$V/settled-seed$a run "$name" --seed "$a" $(wet "$b") ;;
+      DEST=$C FROM=$V/settled-seed$a run "$name" --seed "$a" $(wet "$b") ;;
   esac
 done
