@@ -4,6 +4,7 @@
 use anyhow::{Context, Result};
 use clap::Args;
 use rheodem::cg::KernelShape;
+use rheodem::cg::periodic::axis_index;
 use rheodem::run::{samples, write_fields};
 use rheodem::scenario::spec::FieldGrid;
 use rheodem::setups::split_bottom_fields::{
@@ -145,10 +146,7 @@ fn box_run(args: &CgArgs) -> Result<()> {
         let cells = |len: f64| ((len / (h * diameter)).round() as usize).max(1);
         spec.bins = match spec.grid {
             FieldGrid::Slabs => {
-                let axis = ["x", "y", "z"]
-                    .iter()
-                    .position(|a| *a == spec.axis)
-                    .unwrap_or(1);
+                let axis = axis_index(&spec.axis).context("the run's fields.axis")?;
                 vec![cells(l[axis])]
             }
             FieldGrid::Cartesian => vec![cells(l.x), cells(l.y), cells(l.z)],

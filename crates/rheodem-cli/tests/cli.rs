@@ -11,6 +11,15 @@ fn rheodem(args: &[&str]) -> Output {
         .expect("the binary runs")
 }
 
+/// Asserts that the program exited successfully, showing its error output otherwise.
+fn assert_success(out: &Output) {
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
+
 fn workspace() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
 }
@@ -161,17 +170,9 @@ fn cg_coarse_grains_a_shear_box_again_from_its_samples() {
         "--threads",
         "1",
     ]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    assert_success(&out);
     let out = rheodem(&["cg", &dir_s, "--threads", "1"]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    assert_success(&out);
     let read = |p: PathBuf| std::fs::read_to_string(p).expect("fields.csv");
     assert_eq!(
         read(dir.join("cg/fields.csv")),
@@ -189,19 +190,11 @@ fn cg_coarse_grains_a_shear_box_again_from_its_samples() {
         "--out",
         &again.to_string_lossy(),
     ]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    assert_success(&out);
     let rows = read(again.join("fields.csv")).lines().count() - 1;
     assert!((10..=16).contains(&rows), "{rows} slabs of half a diameter");
     let out = rheodem(&["cg", &dir_s, "--mercury", "--out", &again.to_string_lossy()]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    assert_success(&out);
     let data = read(again.join("mercury.data"));
     let blocks = data
         .lines()

@@ -23,8 +23,8 @@ pub struct BoxFields {
     pub sums: Option<CgSums>,
 }
 
-/// The axis index of `"x"`, `"y"` or `"z"`.
-fn axis_index(name: &str) -> Option<usize> {
+/// The axis index of `"x"`, `"y"` or `"z"` (as `fields.axis` names it).
+pub fn axis_index(name: &str) -> Option<usize> {
     ["x", "y", "z"].iter().position(|&a| a == name)
 }
 
