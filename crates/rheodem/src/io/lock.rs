@@ -39,7 +39,11 @@ pub enum LockError {
 impl DirLock {
     /// Opens (creating) the lock file of `dir`.
     fn open(dir: &Path) -> Result<(File, PathBuf), LockError> {
-        let path = dir.join(LOCK_FILE);
+        DirLock::open_file(dir.join(LOCK_FILE))
+    }
+
+    /// Opens (creating) the lock file `path`.
+    fn open_file(path: PathBuf) -> Result<(File, PathBuf), LockError> {
         match OpenOptions::new()
             .create(true)
             .truncate(false)
@@ -64,7 +68,17 @@ impl DirLock {
     /// Takes the lock of `dir` (which must exist), waiting for whoever holds it: for short
     /// critical sections (rewriting a shared table), never for whole runs.
     pub fn acquire(dir: &Path) -> Result<DirLock, LockError> {
-        let (file, path) = DirLock::open(dir)?;
+        DirLock::wait_for(DirLock::open(dir)?)
+    }
+
+    /// Takes the lock on the file `lock_file` itself (created if missing; its directory
+    /// must exist), waiting for whoever holds it: for guarding one shared file, such as a
+    /// database's first set-up, with `FILE.lock` beside it.
+    pub fn acquire_file(lock_file: &Path) -> Result<DirLock, LockError> {
+        DirLock::wait_for(DirLock::open_file(lock_file.to_path_buf())?)
+    }
+
+    fn wait_for((file, path): (File, PathBuf)) -> Result<DirLock, LockError> {
         match file.lock() {
             Ok(()) => Ok(DirLock { file, path }),
             Err(source) => Err(LockError::Io { path, source }),

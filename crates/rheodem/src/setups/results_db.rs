@@ -7,10 +7,11 @@
 //! per `(study, name)`. A row holds the state point's
 //! controls, the steady-state averages with their standard errors, and the run's
 //! bookkeeping: wall time, commit, insertion time. It also keeps the full JSON of the
-//! point's spec and result, so nothing is lost when a column is missing. Writers open the file in
-//! WAL mode with a busy timeout, and each insertion is one `IMMEDIATE` transaction. So
-//! concurrent writers (the jobs of a sweep, array tasks of a cluster) wait for each other
-//! instead of failing, and a killed writer leaves the file consistent.
+//! point's spec and result, so nothing is lost when a column is missing. Writers open the
+//! file in WAL mode with a busy timeout (the set-up under a lock on `FILE.lock`), and each
+//! insertion is one `IMMEDIATE` transaction. So concurrent writers (the jobs of a sweep,
+//! array tasks of a cluster) wait for each other instead of failing, and a killed writer
+//! leaves the file consistent.
 
 use super::sweep::PointResult;
 use rusqlite::{Connection, OptionalExtension, TransactionBehavior, params};
@@ -162,6 +163,9 @@ pub enum DbError {
         /// What SQLite said.
         source: rusqlite::Error,
     },
+    /// The lock that serialises the database's set-up could not be taken.
+    #[error("results database: {0}")]
+    Lock(#[from] crate::io::lock::LockError),
     /// The file was written by a newer schema.
     #[error(
         "results database {path} has schema version {found}; this rheodem reads version {SCHEMA_VERSION} or older"
@@ -192,17 +196,30 @@ pub struct ResultsDb {
 
 impl ResultsDb {
     /// Opens (creating if needed) the database at `path`.
+    ///
+    /// The set-up (creating the file, switching it to WAL, creating the tables) runs under
+    /// an exclusive lock on `PATH.lock` beside it: SQLite answers a journal-mode change or a
+    /// schema write that meets another opener's with "database is locked" at once, without
+    /// its busy timeout, so concurrent first openers must take turns.
     pub fn open(path: &Path) -> Result<ResultsDb, DbError> {
         let err = |source| DbError::Sqlite {
             path: path.to_path_buf(),
             source,
         };
+        let mut lock_file = path.as_os_str().to_owned();
+        lock_file.push(".lock");
+        let _setup = crate::io::lock::DirLock::acquire_file(Path::new(&lock_file))?;
         let connection = Connection::open(path).map_err(err)?;
         connection.busy_timeout(BUSY_TIMEOUT).map_err(err)?;
         // WAL lets readers go on while one process writes.
-        connection
-            .query_row("PRAGMA journal_mode = WAL", [], |_| Ok(()))
+        let mode: String = connection
+            .query_row("PRAGMA journal_mode", [], |r| r.get(0))
             .map_err(err)?;
+        if !mode.eq_ignore_ascii_case("wal") {
+            connection
+                .query_row("PRAGMA journal_mode = WAL", [], |_| Ok(()))
+                .map_err(err)?;
+        }
         let found: i64 = connection
             .query_row("PRAGMA user_version", [], |r| r.get(0))
             .map_err(err)?;
@@ -212,10 +229,12 @@ impl ResultsDb {
                 found,
             });
         }
-        connection.execute_batch(SCHEMA).map_err(err)?;
-        connection
-            .execute_batch(&format!("PRAGMA user_version = {SCHEMA_VERSION}"))
-            .map_err(err)?;
+        if found < SCHEMA_VERSION {
+            connection.execute_batch(SCHEMA).map_err(err)?;
+            connection
+                .execute_batch(&format!("PRAGMA user_version = {SCHEMA_VERSION}"))
+                .map_err(err)?;
+        }
         Ok(ResultsDb {
             connection,
             path: path.to_path_buf(),
@@ -671,6 +690,32 @@ mod tests {
         });
         let db = ResultsDb::open(&file).expect("opens");
         assert_eq!(db.count(Some("s")).expect("count"), 200);
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    /// Eight connections open a file that does not exist yet at the same moment, twenty
+    /// times over: every one of them opens it and stores its point. (Without the set-up
+    /// lock, SQLite answers some of them "database is locked" at once.)
+    #[test]
+    fn concurrent_first_openers_all_succeed() {
+        let dir = temp("first-open");
+        for round in 0..20 {
+            let file = dir.join(format!("round{round}.sqlite"));
+            let start = std::sync::Barrier::new(8);
+            std::thread::scope(|scope| {
+                for w in 0..8 {
+                    let (file, start) = (&file, &start);
+                    scope.spawn(move || {
+                        start.wait();
+                        let mut db = ResultsDb::open(file).expect("opens under contention");
+                        db.insert("s", &point(&format!("w{w}"), 0.1))
+                            .expect("insert");
+                    });
+                }
+            });
+            let db = ResultsDb::open(&file).expect("opens");
+            assert_eq!(db.count(Some("s")).expect("count"), 8, "round {round}");
+        }
         let _ = std::fs::remove_dir_all(&dir);
     }
 }
