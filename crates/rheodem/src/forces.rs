@@ -37,6 +37,8 @@ pub struct ForceScratch {
 /// The pairs within reach that the first pass of a chunk found.
 #[derive(Clone, Debug, Default)]
 struct Found {
+    /// Pairs within reach (the first `n` entries of a step; never shrunk).
+    within: Vec<Candidate>,
     /// Touching pairs.
     touching: Vec<Touching>,
     /// Pairs apart within the interaction range (adhesive laws).
@@ -164,6 +166,22 @@ pub fn pair_forces<O: ContactObserver>(
     total
 }
 
+/// A list pair within reach, before its distance is taken.
+#[derive(Clone, Copy, Debug, Default)]
+struct Candidate {
+    /// The pair's index in the chunk's slice of the list.
+    local: u32,
+    /// Slots of `i` and `j`.
+    i: u32,
+    j: u32,
+    /// Image code of `j`.
+    code: u8,
+    /// `r_i − r_j` through the image (m).
+    branch: DVec3,
+    /// `|r_i − r_j|²` (m²).
+    d2: f64,
+}
+
 /// A pair within reach found by the first pass of [`chunk_forces`].
 #[derive(Clone, Copy, Debug, Default)]
 pub(crate) struct Touching {
@@ -231,51 +249,62 @@ fn chunk_forces_generic<O: ContactObserver>(
 ) -> O {
     let mut obs = O::default();
     let base = inp.offsets[range.start] as usize;
-    // Pass 1: the pairs within reach.
-    let Found { touching, apart } = found;
-    touching.clear();
-    apart.clear();
+    let Found {
+        within,
+        touching,
+        apart,
+    } = found;
+    // Pass 1a: every pair within reach, compacted without a branch on the distance test
+    // (about half the list pairs touch, so that branch would be unpredictable). A pair
+    // that had a force and is now out of reach (rare) drops its history: such pairs are
+    // only flagged per particle here, and found again in a second look at its pairs.
+    let pairs = inp.offsets[range.end] as usize - base;
+    if within.len() < pairs {
+        within.resize(pairs, Candidate::default());
+    }
+    let mut n = 0;
     for i in range {
-        let r_i = inp.position[i];
-        let a_i = inp.radius[i];
+        let mut stale = false;
         for k in inp.offsets[i] as usize..inp.offsets[i + 1] as usize {
-            let j = inp.partner[k] as usize;
-            let code = inp.image[k];
-            let r_j = if code == IDENTITY_IMAGE {
-                inp.position[j]
-            } else {
-                inp.images[code as usize].position(inp.position[j])
-            };
-            let branch = r_i - r_j;
-            let d2 = branch.length_squared();
-            let sum = a_i + inp.radius[j];
-            let local = k - base;
-            let reach = sum + inp.max_range;
-            if d2 >= reach * reach {
-                if active[local] {
+            let (c, inside) = inp.candidate(i, k, base);
+            within[n] = c;
+            n += usize::from(inside);
+            stale |= active[k - base] & !inside;
+        }
+        if stale {
+            for k in inp.offsets[i] as usize..inp.offsets[i + 1] as usize {
+                let local = k - base;
+                if active[local] && !inp.candidate(i, k, base).1 {
                     active[local] = false;
                     history.clear(local);
                 }
-                continue;
             }
-            let dist = d2.sqrt();
-            let pair = Touching {
-                local: local as u32,
-                i: i as u32,
-                j: j as u32,
-                code,
-                branch,
-                dist,
-            };
-            if sum - dist >= 0.0 {
-                touching.push(pair);
-            } else if history.bridge[local] || !inp.kernel_of(&pair).needs_bridge() {
-                apart.push(pair);
-            } else if active[local] {
-                // Apart without a bridge under an irreversible law: no force.
-                active[local] = false;
-                history.clear(local);
-            }
+        }
+    }
+    // Pass 1b: touching pairs, and pairs apart within an adhesive law's range.
+    touching.clear();
+    apart.clear();
+    for c in &within[..n] {
+        let (i, j) = (c.i as usize, c.j as usize);
+        let sum = inp.radius[i] + inp.radius[j];
+        let dist = c.d2.sqrt();
+        let pair = Touching {
+            local: c.local,
+            i: c.i,
+            j: c.j,
+            code: c.code,
+            branch: c.branch,
+            dist,
+        };
+        let local = c.local as usize;
+        if sum - dist >= 0.0 {
+            touching.push(pair);
+        } else if history.bridge[local] || !inp.kernel_of(&pair).needs_bridge() {
+            apart.push(pair);
+        } else if active[local] {
+            // Apart without a bridge under an irreversible law: no force.
+            active[local] = false;
+            history.clear(local);
         }
     }
     // Pass 2: the contact law over each kind of pair, four at a time.
@@ -347,6 +376,31 @@ fn chunk_forces_generic<O: ContactObserver>(
 const LANES: usize = 4;
 
 impl Inputs<'_> {
+    /// List pair `k` (first partner `i`, `base` the chunk's first pair) with its branch
+    /// vector, and whether it lies within reach (the contact plus the laws' range).
+    #[inline(always)]
+    fn candidate(&self, i: usize, k: usize, base: usize) -> (Candidate, bool) {
+        let j = self.partner[k] as usize;
+        let code = self.image[k];
+        let r_j = if code == IDENTITY_IMAGE {
+            self.position[j]
+        } else {
+            self.images[code as usize].position(self.position[j])
+        };
+        let branch = self.position[i] - r_j;
+        let d2 = branch.length_squared();
+        let reach = self.radius[i] + self.radius[j] + self.max_range;
+        let c = Candidate {
+            local: (k - base) as u32,
+            i: i as u32,
+            j: j as u32,
+            code,
+            branch,
+            d2,
+        };
+        (c, d2 < reach * reach)
+    }
+
     /// The kernel of a pair.
     #[inline(always)]
     fn kernel_of(&self, c: &Touching) -> &PairKernel {
