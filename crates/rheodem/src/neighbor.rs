@@ -71,6 +71,9 @@ pub fn min_wedge_angle(radius: f64, reach: f64) -> Option<f64> {
 /// Particles per block of the parallel neighbour build.
 const BUILD_BLOCK: usize = 256;
 
+/// Particles whose displacements the skin check compares side by side.
+const TOP_LANES: usize = 8;
+
 /// Verlet list with contact history.
 #[derive(Clone, Debug, Default, Serialize, Deserialize)]
 pub struct NeighborList {
@@ -159,15 +162,26 @@ impl NeighborList {
         let lo = self.reference_lo;
         // Branch-free: the larger of the two and the larger of the rest.
         let top2 = |(a0, a1): (f64, f64), d: f64| (a0.max(d), a1.max(a0.min(d)));
+        // Eight running pairs per task, so that the maxima do not wait on each other.
+        let moved = |r: &DVec3, r0: &DVec3| (*r - *r0 - affine * (*r0 - lo)).length_squared();
         let (first, second) = particles
             .position
-            .par_iter()
-            .zip(self.reference_position.par_iter())
-            .with_min_len(PARTICLES_PER_TASK)
+            .par_chunks(TOP_LANES)
+            .zip(self.reference_position.par_chunks(TOP_LANES))
+            .with_min_len(PARTICLES_PER_TASK / TOP_LANES)
             .fold(
-                || (0.0f64, 0.0f64),
-                |acc, (r, r0)| top2(acc, (*r - *r0 - affine * (*r0 - lo)).length_squared()),
+                || [(0.0f64, 0.0f64); TOP_LANES],
+                |mut acc, (r, r0)| {
+                    for ((a, r), r0) in acc.iter_mut().zip(r).zip(r0) {
+                        *a = top2(*a, moved(r, r0));
+                    }
+                    acc
+                },
             )
+            .map(|acc| {
+                acc.into_iter()
+                    .fold((0.0, 0.0), |a, b| top2(top2(a, b.0), b.1))
+            })
             .reduce(|| (0.0, 0.0), |a, b| top2(top2(a, b.0), b.1));
         (1.0 + norm) * (first.sqrt() + second.sqrt()) + norm * (self.interaction_cutoff + self.skin)
             >= self.skin
