@@ -189,7 +189,7 @@ pub fn run_timed(sim: &mut Simulation, warmup: u64, steps: u64) -> BenchReport {
         let t0 = Instant::now();
         sim.begin_step();
         let t1 = Instant::now();
-        if sim.neighbors.needs_rebuild(&sim.particles, &sim.domain) {
+        if sim.list_is_stale() {
             let tb = Instant::now();
             sim.rebuild_neighbors().expect("bench box stays valid");
             t_build += tb.elapsed();

@@ -1,12 +1,12 @@
 //! The parallel pair-force loop.
 //!
 //! Scheme: a half Verlet list, split into as many contiguous slot ranges ("chunks") as the
-//! thread pool has threads, balanced by pair count. Each chunk accumulates forces and
+//! [`Team`] has members, balanced by pair count. Each chunk accumulates forces and
 //! torques of both partners into its own buffer (chunk 0 directly into the particle
 //! arrays); the buffers are then added into the particle arrays slot by slot in chunk order.
 //! Each pair is evaluated once (half the work of a full list) and writes need no atomics or
 //! colouring; the ordered reduction makes a run bit-identical for a given thread count,
-//! whatever rayon's work stealing does. The price is one extra buffer pass per extra
+//! whichever thread runs which chunk. The price is one extra buffer pass per extra
 //! thread, small against the pair work on a few cores.
 //!
 //! A partner seen through a rotated image (a wedge face) receives the reaction rotated back
@@ -23,8 +23,8 @@ use crate::integrate::PARTICLES_PER_TASK;
 use crate::neighbor::NeighborList;
 use crate::observe::{ContactObserver, ContactView};
 use crate::particles::Particles;
+use crate::team::Team;
 use glam::DVec3;
-use rayon::prelude::*;
 
 /// Per-thread force buffers, reused between steps (not part of the simulation state).
 #[derive(Clone, Debug, Default)]
@@ -69,7 +69,8 @@ struct Inputs<'a> {
 /// contact history over `dt` (s). `flow_rate` (1/s) is subtracted as `γ̇ l_y x̂` from each
 /// contact's relative velocity (zero in the lab frame; see `LeesEdwards::peculiar_contacts`).
 /// Every interacting pair is shown to the observer `O`, whose merged observations are
-/// returned.
+/// returned. The chunks are shared among the members of `team`.
+#[allow(clippy::too_many_arguments)]
 pub fn pair_forces<O: ContactObserver>(
     particles: &mut Particles,
     list: &mut NeighborList,
@@ -78,9 +79,10 @@ pub fn pair_forces<O: ContactObserver>(
     flow_rate: f64,
     dt: f64,
     scratch: &mut ForceScratch,
+    team: &Team,
 ) -> O {
     let n = particles.len();
-    let chunks = rayon::current_num_threads().max(1).min(n.max(1));
+    let chunks = team.threads().min(n.max(1));
     let bounds = list.chunk_bounds(chunks);
     let slices = list.slices();
     let inputs = Inputs {
@@ -128,35 +130,50 @@ pub fn pair_forces<O: ContactObserver>(
         };
         jobs.push((lo..hi, t_here, h_here, f, t));
     }
-    let jobs: Vec<_> = jobs.into_iter().zip(scratch.found.iter_mut()).collect();
-
-    let partial: Vec<O> = jobs
-        .into_par_iter()
-        .map(|((range, active, mut history, force, torque), found)| {
+    let mut jobs: Vec<_> = jobs
+        .into_iter()
+        .zip(scratch.found.iter_mut())
+        .map(|(job, found)| (job, found, O::default()))
+        .collect();
+    team.for_each(
+        &mut jobs,
+        |((range, active, history, force, torque), found, out)| {
             force[range.start..].fill(DVec3::ZERO);
             torque[range.start..].fill(DVec3::ZERO);
-            chunk_forces::<O>(&inputs, range, active, &mut history, force, torque, found)
-        })
-        .collect();
+            *out = chunk_forces::<O>(
+                &inputs,
+                range.clone(),
+                active,
+                history,
+                force,
+                torque,
+                found,
+            );
+        },
+    );
+    let partial: Vec<O> = jobs.into_iter().map(|(_, _, out)| out).collect();
 
     if chunks > 1 {
         // Chunk `c` wrote only the slots from `bounds[c]` on: nothing to add before
         // `bounds[1]`.
         let (extra_f, extra_t, first) = (&scratch.force, &scratch.torque, bounds[1]);
-        particles.force[first..]
-            .par_iter_mut()
-            .zip(particles.torque[first..].par_iter_mut())
+        let len = team.piece_len(n - first, PARTICLES_PER_TASK);
+        let mut pieces: Vec<_> = particles.force[first..]
+            .chunks_mut(len)
+            .zip(particles.torque[first..].chunks_mut(len))
             .enumerate()
-            .with_min_len(PARTICLES_PER_TASK)
-            .for_each(|(k, (f, t))| {
-                let i = first + k;
-                for ((bf, bt), &start) in extra_f.iter().zip(extra_t).zip(&bounds[1..]) {
-                    if i >= start {
-                        *f += bf[i];
-                        *t += bt[i];
-                    }
+            .collect();
+        team.for_each(&mut pieces, |(piece, (f, t))| {
+            let offset = first + *piece * len;
+            for ((bf, bt), &start) in extra_f.iter().zip(extra_t).zip(&bounds[1..]) {
+                // Slots before `start` hold nothing from this buffer.
+                let from = start.saturating_sub(offset).min(f.len());
+                for k in from..f.len() {
+                    f[k] += bf[offset + k];
+                    t[k] += bt[offset + k];
                 }
-            });
+            }
+        });
     }
 
     let mut total = O::default();

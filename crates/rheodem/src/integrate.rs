@@ -5,23 +5,30 @@
 //! Spheres need no orientation for their dynamics, so only angular velocities are integrated.
 
 use crate::particles::{Motion, Particles};
+use crate::team::Team;
 use glam::{DQuat, DVec3};
-use rayon::prelude::*;
 
-/// Fewest particles per rayon task in the loops over particles: such a loop costs
-/// nanoseconds per particle, handing a task to another thread microseconds.
-pub(crate) const PARTICLES_PER_TASK: usize = 2048;
+/// Fewest particles per team member in the loops over particles: such a loop costs
+/// nanoseconds per particle, handing a piece to another thread a fraction of a
+/// microsecond (see [`crate::team`]).
+pub(crate) const PARTICLES_PER_TASK: usize = 512;
 
 /// Half-step velocity update `v += F/m · h`, `ω += T/I · h` (free particles only: prescribed
-/// ones have zero inverse mass and inertia).
-pub fn kick(p: &mut Particles, h: f64) {
-    p.velocity
-        .par_iter_mut()
-        .zip(p.angular_velocity.par_iter_mut())
-        .zip(p.force.par_iter().zip(&p.torque))
-        .zip(p.inv_mass.par_iter().zip(&p.inv_inertia))
-        .with_min_len(PARTICLES_PER_TASK)
-        .for_each(|(((v, w), (f, t)), (im, ii))| kick_one(v, w, *f, *t, *im, *ii, h));
+/// ones have zero inverse mass and inertia), shared among the members of `team`.
+pub fn kick(p: &mut Particles, h: f64, team: &Team) {
+    let len = team.piece_len(p.len(), PARTICLES_PER_TASK);
+    let mut pieces: Vec<_> = p
+        .velocity
+        .chunks_mut(len)
+        .zip(p.angular_velocity.chunks_mut(len))
+        .zip(p.force.chunks(len).zip(p.torque.chunks(len)))
+        .zip(p.inv_mass.chunks(len).zip(p.inv_inertia.chunks(len)))
+        .collect();
+    team.for_each(&mut pieces, |(((v, w), (f, t)), (im, ii))| {
+        for k in 0..v.len() {
+            kick_one(&mut v[k], &mut w[k], f[k], t[k], im[k], ii[k], h);
+        }
+    });
 }
 
 #[inline(always)]
@@ -32,31 +39,44 @@ fn kick_one(v: &mut DVec3, w: &mut DVec3, f: DVec3, t: DVec3, im: f64, ii: f64, 
 
 /// Position update over `dt` (s): free particles move with their velocity; prescribed ones
 /// follow their motion law (a rigid rotation sets position, velocity and angular velocity).
-pub fn drift(p: &mut Particles, dt: f64) {
-    p.position
-        .par_iter_mut()
-        .zip(p.velocity.par_iter_mut())
-        .zip(p.angular_velocity.par_iter_mut())
-        .zip(p.motion.par_iter())
-        .with_min_len(PARTICLES_PER_TASK)
-        .for_each(|(((r, v), w), motion)| drift_one(r, v, w, motion, dt));
+pub fn drift(p: &mut Particles, dt: f64, team: &Team) {
+    let len = team.piece_len(p.len(), PARTICLES_PER_TASK);
+    let mut pieces: Vec<_> = p
+        .position
+        .chunks_mut(len)
+        .zip(p.velocity.chunks_mut(len))
+        .zip(p.angular_velocity.chunks_mut(len))
+        .zip(p.motion.chunks(len))
+        .collect();
+    team.for_each(&mut pieces, |(((r, v), w), motion)| {
+        for k in 0..r.len() {
+            drift_one(&mut r[k], &mut v[k], &mut w[k], &motion[k], dt);
+        }
+    });
 }
 
 /// [`kick`] over `h` (s) followed by [`drift`] over `dt` (s), in one pass over the
 /// particles (the same numbers as the two calls).
-pub fn kick_drift(p: &mut Particles, h: f64, dt: f64) {
-    p.position
-        .par_iter_mut()
-        .zip(p.velocity.par_iter_mut())
-        .zip(p.angular_velocity.par_iter_mut())
-        .zip(p.motion.par_iter())
-        .zip(p.force.par_iter().zip(&p.torque))
-        .zip(p.inv_mass.par_iter().zip(&p.inv_inertia))
-        .with_min_len(PARTICLES_PER_TASK)
-        .for_each(|(((((r, v), w), motion), (f, t)), (im, ii))| {
-            kick_one(v, w, *f, *t, *im, *ii, h);
-            drift_one(r, v, w, motion, dt);
-        });
+pub fn kick_drift(p: &mut Particles, h: f64, dt: f64, team: &Team) {
+    let len = team.piece_len(p.len(), PARTICLES_PER_TASK);
+    let mut pieces: Vec<_> = p
+        .position
+        .chunks_mut(len)
+        .zip(p.velocity.chunks_mut(len))
+        .zip(p.angular_velocity.chunks_mut(len))
+        .zip(p.motion.chunks(len))
+        .zip(p.force.chunks(len).zip(p.torque.chunks(len)))
+        .zip(p.inv_mass.chunks(len).zip(p.inv_inertia.chunks(len)))
+        .collect();
+    team.for_each(
+        &mut pieces,
+        |(((((r, v), w), motion), (f, t)), (im, ii))| {
+            for k in 0..r.len() {
+                kick_one(&mut v[k], &mut w[k], f[k], t[k], im[k], ii[k], h);
+                drift_one(&mut r[k], &mut v[k], &mut w[k], &motion[k], dt);
+            }
+        },
+    );
 }
 
 #[inline(always)]
@@ -81,19 +101,23 @@ fn drift_one(r: &mut DVec3, v: &mut DVec3, w: &mut DVec3, motion: &Motion, dt: f
 }
 
 /// Adds gravity `m g` (N) to the force of every free particle.
-pub fn add_gravity(p: &mut Particles, g: DVec3) {
+pub fn add_gravity(p: &mut Particles, g: DVec3, team: &Team) {
     if g == DVec3::ZERO {
         return;
     }
-    p.force
-        .par_iter_mut()
-        .zip(p.mass.par_iter().zip(&p.motion))
-        .with_min_len(PARTICLES_PER_TASK)
-        .for_each(|(f, (m, motion))| {
-            if motion.is_free() {
-                *f += g * *m;
+    let len = team.piece_len(p.len(), PARTICLES_PER_TASK);
+    let mut pieces: Vec<_> = p
+        .force
+        .chunks_mut(len)
+        .zip(p.mass.chunks(len).zip(p.motion.chunks(len)))
+        .collect();
+    team.for_each(&mut pieces, |(f, (m, motion))| {
+        for k in 0..f.len() {
+            if motion[k].is_free() {
+                f[k] += g * m[k];
             }
-        });
+        }
+    });
 }
 
 #[cfg(test)]
@@ -123,7 +147,7 @@ mod tests {
         );
         let dt = 1e-3;
         for _ in 0..1000 {
-            drift(&mut p, dt);
+            drift(&mut p, dt, &Team::new(1));
         }
         // After t = 1: angle 0.7 rad about z through `center`; height unchanged.
         let expected = center + DVec3::new(3.0 * omega.cos(), 3.0 * omega.sin(), 5.0);
@@ -133,7 +157,7 @@ mod tests {
         assert_eq!(p.angular_velocity[0], DVec3::Z * omega);
         // Kicks never move a prescribed particle.
         p.force[0] = DVec3::ONE;
-        kick(&mut p, 1.0);
+        kick(&mut p, 1.0, &Team::new(2));
         assert!((p.velocity[0] - v).length() < 1e-15);
     }
 }

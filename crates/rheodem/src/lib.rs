@@ -72,6 +72,7 @@ pub mod setups;
 pub mod simulation;
 pub mod stage;
 pub mod stress_control;
+pub mod team;
 pub mod timestep;
 pub mod walls;
 

@@ -22,8 +22,8 @@ use crate::contact::{ContactHistory, HistorySlots, HistoryView};
 use crate::domain::{Domain, IDENTITY_IMAGE, IMAGE_COUNT, ImageTransform, image_code};
 use crate::integrate::PARTICLES_PER_TASK;
 use crate::particles::{Motion, Particles};
+use crate::team::Team;
 use glam::{DMat3, DVec3};
-use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 /// Errors of the neighbour search.
@@ -145,8 +145,9 @@ impl NeighborList {
         }
     }
 
-    /// Whether the list must be rebuilt before the next force evaluation.
-    pub fn needs_rebuild(&self, particles: &Particles, domain: &Domain) -> bool {
+    /// Whether the list must be rebuilt before the next force evaluation (the particles'
+    /// displacements are checked by the members of `team`).
+    pub fn needs_rebuild(&self, particles: &Particles, domain: &Domain, team: &Team) -> bool {
         if self.reference_position.len() != particles.len()
             || domain.image_epoch() != self.reference_epoch
         {
@@ -164,25 +165,27 @@ impl NeighborList {
         let top2 = |(a0, a1): (f64, f64), d: f64| (a0.max(d), a1.max(a0.min(d)));
         // Eight running pairs per task, so that the maxima do not wait on each other.
         let moved = |r: &DVec3, r0: &DVec3| (*r - *r0 - affine * (*r0 - lo)).length_squared();
-        let (first, second) = particles
+        let len = team.piece_len(particles.len(), PARTICLES_PER_TASK);
+        let mut pieces: Vec<_> = particles
             .position
-            .par_chunks(TOP_LANES)
-            .zip(self.reference_position.par_chunks(TOP_LANES))
-            .with_min_len(PARTICLES_PER_TASK / TOP_LANES)
-            .fold(
-                || [(0.0f64, 0.0f64); TOP_LANES],
-                |mut acc, (r, r0)| {
-                    for ((a, r), r0) in acc.iter_mut().zip(r).zip(r0) {
-                        *a = top2(*a, moved(r, r0));
-                    }
-                    acc
-                },
-            )
-            .map(|acc| {
-                acc.into_iter()
-                    .fold((0.0, 0.0), |a, b| top2(top2(a, b.0), b.1))
-            })
-            .reduce(|| (0.0, 0.0), |a, b| top2(top2(a, b.0), b.1));
+            .chunks(len)
+            .zip(self.reference_position.chunks(len))
+            .map(|(r, r0)| (r, r0, (0.0f64, 0.0f64)))
+            .collect();
+        team.for_each(&mut pieces, |(r, r0, top)| {
+            let mut acc = [(0.0f64, 0.0f64); TOP_LANES];
+            for (r, r0) in r.chunks(TOP_LANES).zip(r0.chunks(TOP_LANES)) {
+                for ((a, r), r0) in acc.iter_mut().zip(r).zip(r0) {
+                    *a = top2(*a, moved(r, r0));
+                }
+            }
+            *top = acc
+                .into_iter()
+                .fold((0.0, 0.0), |a, b| top2(top2(a, b.0), b.1));
+        });
+        let (first, second) = pieces
+            .iter()
+            .fold((0.0, 0.0), |a, p| top2(top2(a, p.2.0), p.2.1));
         (1.0 + norm) * (first.sqrt() + second.sqrt()) + norm * (self.interaction_cutoff + self.skin)
             >= self.skin
     }
@@ -195,30 +198,37 @@ impl NeighborList {
         &mut self,
         particles: &mut Particles,
         domain: &Domain,
+        team: &Team,
     ) -> Result<(), NeighborError> {
         // Wrap first, remembering the wedge turns of every particle (by id) so that the
         // history of a pair follows its particles through the faces.
         let images = domain.image_transforms();
-        let moves: Vec<(u32, i32, DMat3)> = particles
+        let len = team.piece_len(particles.len(), PARTICLES_PER_TASK);
+        let mut pieces: Vec<_> = particles
             .position
-            .par_iter_mut()
-            .zip(particles.velocity.par_iter_mut())
-            .zip(particles.angular_velocity.par_iter_mut())
-            .zip(particles.motion.par_iter_mut())
-            .zip(particles.id.par_iter())
-            .with_min_len(PARTICLES_PER_TASK)
-            .filter_map(|((((r, v), w), motion), &id)| {
-                let k = domain.wedge_turns(*r);
-                let moved = domain.wrap(r, v, w);
+            .chunks_mut(len)
+            .zip(particles.velocity.chunks_mut(len))
+            .zip(particles.angular_velocity.chunks_mut(len))
+            .zip(particles.motion.chunks_mut(len))
+            .zip(particles.id.chunks(len))
+            .map(|piece| (piece, Vec::new()))
+            .collect();
+        team.for_each(&mut pieces, |(((((r, v), w), motion), id), moves)| {
+            for k in 0..r.len() {
+                let turns = domain.wedge_turns(r[k]);
+                let moved = domain.wrap(&mut r[k], &mut v[k], &mut w[k]);
                 // A rotating wall particle moved to its periodic image rotates about the
                 // image of its axis.
-                if let Motion::Rotating { center, axis, .. } = motion {
+                if let Motion::Rotating { center, axis, .. } = &mut motion[k] {
                     *center = moved.position(*center);
                     *axis = moved.angular_velocity(*axis);
                 }
-                moved.rotation.map(|m| (id, k, m))
-            })
-            .collect();
+                if let Some(m) = moved.rotation {
+                    moves.push((id[k], turns, m));
+                }
+            }
+        });
+        let moves: Vec<(u32, i32, DMat3)> = pieces.into_iter().flat_map(|p| p.1).collect();
         let mut turns = vec![0i32; particles.len()];
         let mut rotated = Vec::with_capacity(moves.len());
         for (id, k, m) in moves {
@@ -244,12 +254,16 @@ impl NeighborList {
         let grid = CellGrid::new(domain, cutoff)?;
 
         // Stable counting sort by cell: deterministic, and neighbours end up close in memory.
-        let cell_of: Vec<u32> = particles
-            .position
-            .par_iter()
-            .with_min_len(PARTICLES_PER_TASK)
-            .map(|r| grid.cell_index(*r))
+        let mut cell_of = vec![0u32; particles.len()];
+        let mut pieces: Vec<_> = cell_of
+            .chunks_mut(len)
+            .zip(particles.position.chunks(len))
             .collect();
+        team.for_each(&mut pieces, |(cells, r)| {
+            for (c, r) in cells.iter_mut().zip(r.iter()) {
+                *c = grid.cell_index(*r);
+            }
+        });
         let mut start = vec![0u32; grid.count() + 1];
         for &c in &cell_of {
             start[c as usize + 1] += 1;
@@ -266,7 +280,7 @@ impl NeighborList {
         particles.permute(&order);
         let carried = self.carry_history(particles, domain, &images, &turns, &order);
 
-        self.find_pairs(particles, &grid, &start, domain);
+        self.find_pairs(particles, &grid, &start, domain, team);
 
         // Every pair of the new list takes its carried history, or none; rows of blocks
         // of particles are written in parallel into their own stretch of the list.
@@ -284,18 +298,17 @@ impl NeighborList {
             jobs.push((rows, a_here, h_here));
         }
         let (offsets, partner, image) = (&self.offsets, &self.partner, &self.image);
-        jobs.into_par_iter()
-            .for_each(|(rows, active, mut history)| {
-                let base = offsets[rows.start] as usize;
-                for i in rows {
-                    for k in offsets[i] as usize..offsets[i + 1] as usize {
-                        let turns = domain.image_turns(image[k]);
-                        let h = carried.get(i as u32, partner[k], turns);
-                        active[k - base] = h.is_some();
-                        history.set(k - base, &h.unwrap_or_default());
-                    }
+        team.for_each(&mut jobs, |(rows, active, history)| {
+            let base = offsets[rows.start] as usize;
+            for i in rows.clone() {
+                for k in offsets[i] as usize..offsets[i + 1] as usize {
+                    let turns = domain.image_turns(image[k]);
+                    let h = carried.get(i as u32, partner[k], turns);
+                    active[k - base] = h.is_some();
+                    history.set(k - base, &h.unwrap_or_default());
                 }
-            });
+            }
+        });
         self.carried = carried;
 
         self.reference_position = particles.position.clone();
@@ -386,6 +399,7 @@ impl NeighborList {
         grid: &CellGrid,
         start: &[u32],
         domain: &Domain,
+        team: &Team,
     ) {
         let n = particles.len();
         let pos = &particles.position;
@@ -453,27 +467,26 @@ impl NeighborList {
             // Partners sorted by slot for a predictable memory walk.
             row.sort_unstable();
         };
-        let blocks: Vec<(Vec<u32>, Vec<u32>, Vec<u8>)> = (0..n.div_ceil(BUILD_BLOCK))
-            .into_par_iter()
-            .map(|b| {
-                let (mut lens, mut partner, mut image) = (Vec::new(), Vec::new(), Vec::new());
-                let mut row = Vec::new();
-                let mut stencil = Stencil::default();
-                for i in b * BUILD_BLOCK..((b + 1) * BUILD_BLOCK).min(n) {
-                    row_of(i, &mut row, &mut stencil);
-                    lens.push(row.len() as u32);
-                    partner.extend(row.iter().map(|p| p.0));
-                    image.extend(row.iter().map(|p| p.1));
-                }
-                (lens, partner, image)
-            })
+        type Block = (usize, Vec<u32>, Vec<u32>, Vec<u8>);
+        let mut blocks: Vec<Block> = (0..n.div_ceil(BUILD_BLOCK))
+            .map(|b| (b, Vec::new(), Vec::new(), Vec::new()))
             .collect();
+        team.for_each(&mut blocks, |(b, lens, partner, image)| {
+            let mut row = Vec::new();
+            let mut stencil = Stencil::default();
+            for i in *b * BUILD_BLOCK..((*b + 1) * BUILD_BLOCK).min(n) {
+                row_of(i, &mut row, &mut stencil);
+                lens.push(row.len() as u32);
+                partner.extend(row.iter().map(|p| p.0));
+                image.extend(row.iter().map(|p| p.1));
+            }
+        });
         self.offsets.clear();
         self.partner.clear();
         self.image.clear();
         self.offsets.reserve(n + 1);
         self.offsets.push(0);
-        for (lens, partner, image) in blocks {
+        for (_, lens, partner, image) in blocks {
             for len in lens {
                 let last = *self.offsets.last().unwrap_or(&0);
                 self.offsets.push(last + len);

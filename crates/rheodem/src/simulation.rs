@@ -16,6 +16,7 @@ use crate::observe::{ContactObserver, PartLoads, StressSum};
 use crate::particles::{Particles, Sphere};
 use crate::sanity::{self, DeepestContact, Instability, Limits};
 use crate::stress_control::StressControl;
+use crate::team::TeamSlot;
 use crate::walls::Wall;
 use glam::DVec3;
 use serde::{Deserialize, Serialize};
@@ -58,6 +59,9 @@ pub struct Simulation {
     part_loads: PartLoads,
     #[serde(skip)]
     scratch: ForceScratch,
+    /// The threads that share the step's loops.
+    #[serde(skip)]
+    team: TeamSlot,
 }
 
 impl Simulation {
@@ -143,9 +147,10 @@ impl Simulation {
             measured: (0, ContactSums::default()),
             part_loads: PartLoads::default(),
             scratch: ForceScratch::default(),
+            team: TeamSlot::default(),
         };
         // Give prescribed particles the velocities of their motion law.
-        drift(&mut sim.particles, 0.0);
+        drift(&mut sim.particles, 0.0, sim.team.get());
         sim.rebuild_neighbors()?;
         sim.compute_forces(true);
         Ok(sim)
@@ -164,7 +169,7 @@ impl Simulation {
     /// First half of a step: half kick, drift (with the affine drag of the mean flow under
     /// [`crate::domain::ShearDynamics::AffineDrag`]), advance the clock.
     pub fn begin_step(&mut self) {
-        kick_drift(&mut self.particles, 0.5 * self.dt, self.dt);
+        kick_drift(&mut self.particles, 0.5 * self.dt, self.dt, self.team.get());
         let motion = &self.particles.motion;
         self.domain.drag_affinely(
             &mut self.particles.position,
@@ -186,21 +191,31 @@ impl Simulation {
 
     /// Last part of a step, after the forces: the second half kick.
     pub fn end_step(&mut self) {
-        kick(&mut self.particles, 0.5 * self.dt);
+        kick(&mut self.particles, 0.5 * self.dt, self.team.get());
     }
 
     /// Rebuilds the neighbour list if particles or images have moved far enough.
     pub fn refresh_neighbors(&mut self) -> Result<(), NeighborError> {
-        if self.neighbors.needs_rebuild(&self.particles, &self.domain) {
+        if self.list_is_stale() {
             self.rebuild_neighbors()?;
         }
         Ok(())
     }
 
+    /// Whether particles or images have moved far enough that the neighbour list must be
+    /// rebuilt before the next force evaluation.
+    pub fn list_is_stale(&mut self) -> bool {
+        let team = self.team.get();
+        self.neighbors
+            .needs_rebuild(&self.particles, &self.domain, team)
+    }
+
     /// Rebuilds the neighbour list now; walls rotate the history of particles that crossed
     /// a wedge face with them and renew their lists of particles within reach.
     pub fn rebuild_neighbors(&mut self) -> Result<(), NeighborError> {
-        self.neighbors.build(&mut self.particles, &self.domain)?;
+        let team = self.team.get();
+        self.neighbors
+            .build(&mut self.particles, &self.domain, team)?;
         let reach = self.neighbors.range + self.neighbors.skin;
         for wall in &mut self.walls {
             for &(id, rotation) in self.neighbors.last_rotations() {
@@ -278,6 +293,7 @@ impl Simulation {
     pub fn compute_forces_with<O: ContactObserver>(&mut self) -> O {
         let images = self.domain.image_transforms();
         let flow = self.domain.contact_flow_rate();
+        let team = self.team.get();
         let (p, nb, laws, dt, scratch) = (
             &mut self.particles,
             &mut self.neighbors,
@@ -285,7 +301,7 @@ impl Simulation {
             self.dt,
             &mut self.scratch,
         );
-        let mut obs = pair_forces::<O>(p, nb, laws, &images, flow, dt, scratch);
+        let mut obs = pair_forces::<O>(p, nb, laws, &images, flow, dt, scratch, team);
         for (index, wall) in self.walls.iter_mut().enumerate() {
             wall.apply(
                 index as u32,
@@ -295,7 +311,7 @@ impl Simulation {
                 &mut obs,
             );
         }
-        add_gravity(&mut self.particles, self.gravity);
+        add_gravity(&mut self.particles, self.gravity, self.team.get());
         obs
     }
 

@@ -151,13 +151,7 @@ fn history_survives_rebuilds_and_resorting() {
         quiet.step(k == 399).expect("step");
         rebuilt.step(false).expect("step");
         if k % 7 == 0 {
-            let rheodem::Simulation {
-                particles,
-                domain,
-                neighbors,
-                ..
-            } = &mut rebuilt;
-            neighbors.build(particles, domain).expect("rebuild");
+            rebuilt.rebuild_neighbors().expect("rebuild");
         }
     }
     assert!(rebuilt.neighbors.builds > 50);

@@ -217,9 +217,7 @@ fn pair_record(
     for k in 1..=steps {
         sim.step(false).expect("step");
         if k % rebuild_every == 0 {
-            sim.neighbors
-                .build(&mut sim.particles, &sim.domain)
-                .expect("rebuild");
+            sim.rebuild_neighbors().expect("rebuild");
         }
         record(&mut sim, &mut out);
     }

@@ -22,6 +22,7 @@ use rheodem::forces::{ForceScratch, pair_forces};
 use rheodem::measure::{ContactSums, kinetic_stress_sum};
 use rheodem::neighbor::NeighborList;
 use rheodem::particles::{Motion, Particles, Sphere};
+use rheodem::team::Team;
 use rheodem::walls::Wall;
 use std::f64::consts::PI;
 
@@ -200,8 +201,9 @@ fn measured_pairs(
     law: ContactLaw,
     range: f64,
 ) -> ContactSums {
+    let team = Team::new(rayon::current_num_threads());
     let mut list = NeighborList::new(0.2e-3, range);
-    list.build(particles, domain).expect("list");
+    list.build(particles, domain, &team).expect("list");
     pair_forces::<ContactSums>(
         particles,
         &mut list,
@@ -210,6 +212,7 @@ fn measured_pairs(
         0.0,
         DT,
         &mut ForceScratch::default(),
+        &team,
     )
 }
 
