@@ -15,9 +15,7 @@
 
 use crate::contact::kernel::{Springs, Touch};
 use crate::contact::lanes::{F4, Real, V3};
-use crate::contact::{
-    ContactHistory, ContactTable, HistoryView, PairForce, PairKernel, PairKinematics,
-};
+use crate::contact::{ContactTable, HistoryView, PairForce, PairKernel, PairKinematics};
 use crate::domain::{IDENTITY_IMAGE, IMAGE_COUNT, ImageTransform};
 use crate::integrate::PARTICLES_PER_TASK;
 use crate::neighbor::NeighborList;
@@ -509,13 +507,17 @@ fn apart_batch<O: ContactObserver>(
     let normal = branch.scale(F4::splat(1.0) / dist);
     let separation = -(sum - dist);
     let (f_a, alive) = kernel.apart_lanes::<F4, false>(separation, radius_i, radius_j, bridge);
+    let rotation = kernel.resists_rotation();
     for (l, c) in batch.iter().enumerate() {
         let (i, j, local) = (c.i as usize, c.j as usize, c.local as usize);
-        let h = ContactHistory {
-            bridge: alive[l],
-            ..ContactHistory::default()
-        };
-        history.set(local, &h);
+        // The springs relax. Those of rotation stay zero under a law without them, so
+        // their slots (a cache line each) are left untouched.
+        history.tangential[local] = DVec3::ZERO;
+        if rotation {
+            history.rolling[local] = DVec3::ZERO;
+            history.torsion[local] = DVec3::ZERO;
+        }
+        history.bridge[local] = alive[l];
         let f = f_a.0[l];
         if f == 0.0 {
             active[local] = false;
@@ -540,7 +542,7 @@ fn apart_batch<O: ContactObserver>(
                 kinematics: &inp.kinematics(i, j, c.code, c.branch, c.dist),
                 force: &pf,
                 law: inp.laws.get(inp.species[i], inp.species[j]),
-                history: &h,
+                history: &history.get(local),
             });
         }
     }
