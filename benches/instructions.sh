@@ -35,4 +35,5 @@ for c in "${VARIANTS[@]}"; do
   awk -v a="$short" -v b="$long" -v s="$((STEPS_LONG - STEPS_SHORT))" -v c="$c" \
     'BEGIN { printf "%s: %.0f instructions per particle-step (steady state, %d steps x 4096)\n", c, (b - a) / (s * 4096), s }'
 done
-[ "${KEEP:-0}" = 1 ] && echo "raw cachegrind files in $TMP"
+# (an `if`, so that the script's status is 0 when KEEP is unset)
+if [ "${KEEP:-0}" = 1 ]; then echo "raw cachegrind files in $TMP"; fi
