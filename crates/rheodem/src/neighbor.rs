@@ -359,31 +359,33 @@ impl NeighborList {
             }),
             _ => h,
         };
-        let (offsets, active, partner) = (&self.offsets, &self.active, &self.partner);
-        let new_slot = &new_slot;
-        let live = || {
-            (0..rows).flat_map(move |i| {
-                (offsets[i] as usize..offsets[i + 1] as usize)
-                    .filter(move |&k| active[k])
-                    .map(move |k| (new_slot[i], new_slot[partner[k] as usize], k))
-            })
-        };
-        for (a, b, _) in live() {
-            carried.count(a.min(b));
+        for i in 0..rows {
+            for k in self.offsets[i] as usize..self.offsets[i + 1] as usize {
+                if self.active[k] {
+                    let (a, b) = (new_slot[i], new_slot[self.partner[k] as usize]);
+                    carried.count(a.min(b));
+                }
+            }
         }
         carried.start_filling();
-        for (a, b, k) in live() {
-            let h = self.history.get(k);
-            let c = domain.image_turns(self.image[k]);
-            // b's image `R(cΦ) r_b` lies next to `r_a`; after the wraps `r_a → R(−t_a Φ) r_a`,
-            // `r_b → R(−t_b Φ) r_b` it is `R((c − t_a + t_b) Φ) r_b`: the key's turns are
-            // `c − t_a + t_b` (the signs of `t` were once reversed, which lost the
-            // history of every pair whose particle wrapped through a face).
-            if a < b {
-                carried.fill(a, b, c - turn(a) + turn(b), into_frame(h, a));
-            } else {
-                let seen_from_b = h.rotated_back(&images[self.image[k] as usize]).flipped();
-                carried.fill(b, a, -c - turn(b) + turn(a), into_frame(seen_from_b, b));
+        for i in 0..rows {
+            for k in self.offsets[i] as usize..self.offsets[i + 1] as usize {
+                if !self.active[k] {
+                    continue;
+                }
+                let (a, b) = (new_slot[i], new_slot[self.partner[k] as usize]);
+                let h = self.history.get(k);
+                let c = domain.image_turns(self.image[k]);
+                // b's image `R(cΦ) r_b` lies next to `r_a`; after the wraps
+                // `r_a → R(−t_a Φ) r_a`, `r_b → R(−t_b Φ) r_b` it is `R((c − t_a + t_b) Φ) r_b`:
+                // the key's turns are `c − t_a + t_b` (the signs of `t` were once reversed,
+                // which lost the history of every pair whose particle wrapped through a face).
+                if a < b {
+                    carried.fill(a, b, c - turn(a) + turn(b), into_frame(h, a));
+                } else {
+                    let seen_from_b = h.rotated_back(&images[self.image[k] as usize]).flipped();
+                    carried.fill(b, a, -c - turn(b) + turn(a), into_frame(seen_from_b, b));
+                }
             }
         }
         carried
@@ -410,8 +412,10 @@ impl NeighborList {
         let rotated = domain.rotated_images();
         let images = domain.image_transforms();
         let wedge = domain.wedge;
-        let row_of = |i: usize, row: &mut Vec<(u32, u8)>, stencil: &mut Stencil| {
-            row.clear();
+        // The row of `i` in `row[..len]` (returned); `row` is a buffer that only grows, so
+        // that its entries are not cleared for each particle.
+        let row_of = |i: usize, row: &mut Vec<(u32, u8)>, stencil: &mut Stencil| -> usize {
+            let mut len = 0;
             let ci = grid.cell_coords(pos[i]);
             stencil.update(grid, start, ci, pos[i]);
             let (r_i, a_i, free_i) = (pos[i], rad[i], free[i]);
@@ -424,15 +428,21 @@ impl NeighborList {
                 }
                 // Branch-free: every candidate is written, the length advances only for
                 // those within reach.
-                let mut len = row.len();
-                row.resize(len + hi - lo, (0, 0));
-                for j in lo..hi {
-                    let cut = a_i + rad[j] + reach;
-                    let d = r_i - (pos[j] + shift);
-                    row[len] = (j as u32, code);
-                    len += usize::from(d.length_squared() < cut * cut && (free_i || free[j]));
+                if row.len() < len + hi - lo {
+                    row.resize(len + hi - lo, (0, 0));
                 }
-                row.truncate(len);
+                let found = &mut row[len..len + hi - lo];
+                let mut m = 0;
+                let cells = pos[lo..hi].iter().zip(&rad[lo..hi]).zip(&free[lo..hi]);
+                for (j, ((&r_j, &a_j), &free_j)) in (lo..hi).zip(cells) {
+                    let cut = a_i + a_j + reach;
+                    let d = r_i - (r_j + shift);
+                    found[m] = (j as u32, code);
+                    // `&` and `|`, not `&&` and `||`: a short circuit is a branch, taken
+                    // for the one candidate in six that is within reach, so mispredicted.
+                    m += usize::from((d.length_squared() < cut * cut) & (free_i | free_j));
+                }
+                len += m;
             }
             // Wedge images: j seen at R r_j is within reach of r_i where R⁻¹ r_i is within
             // reach of r_j; only query positions within a cutoff of the wedge can find one.
@@ -457,7 +467,11 @@ impl NeighborList {
                                 let cut = rad[i] + rad[j] + reach;
                                 let d = pos[i] - image.position(pos[j]);
                                 if d.length_squared() < cut * cut {
-                                    row.push((j as u32, code));
+                                    if row.len() == len {
+                                        row.push((0, 0));
+                                    }
+                                    row[len] = (j as u32, code);
+                                    len += 1;
                                 }
                             }
                         }
@@ -465,7 +479,8 @@ impl NeighborList {
                 }
             }
             // Partners sorted by slot for a predictable memory walk.
-            row.sort_unstable();
+            row[..len].sort_unstable();
+            len
         };
         type Block = (usize, Vec<u32>, Vec<u32>, Vec<u8>);
         let mut blocks: Vec<Block> = (0..n.div_ceil(BUILD_BLOCK))
@@ -475,10 +490,10 @@ impl NeighborList {
             let mut row = Vec::new();
             let mut stencil = Stencil::default();
             for i in *b * BUILD_BLOCK..((*b + 1) * BUILD_BLOCK).min(n) {
-                row_of(i, &mut row, &mut stencil);
-                lens.push(row.len() as u32);
-                partner.extend(row.iter().map(|p| p.0));
-                image.extend(row.iter().map(|p| p.1));
+                let len = row_of(i, &mut row, &mut stencil);
+                lens.push(len as u32);
+                partner.extend(row[..len].iter().map(|p| p.0));
+                image.extend(row[..len].iter().map(|p| p.1));
             }
         });
         self.offsets.clear();
@@ -567,12 +582,11 @@ struct CarriedHistory {
 }
 
 impl CarriedHistory {
-    /// Empties the rows, for particle slots below `slots`.
+    /// Empties the rows, for particle slots below `slots`. The entries' buffers keep their
+    /// length: every entry that a row will reach is written by [`CarriedHistory::fill`].
     fn clear(&mut self, slots: usize) {
         self.start.clear();
         self.start.resize(slots + 2, 0);
-        self.key.clear();
-        self.history.clear();
     }
 
     /// Counts one entry in the row of `lower`.
@@ -587,8 +601,10 @@ impl CarriedHistory {
             self.start[id] += self.start[id - 1];
         }
         let total = self.start[self.start.len() - 1] as usize;
-        self.key.resize(total, (0, 0));
-        self.history.resize(total, ContactHistory::default());
+        if self.key.len() < total {
+            self.key.resize(total, (0, 0));
+            self.history.resize(total, ContactHistory::default());
+        }
     }
 
     /// Places an entry in the row of `lower`; once all are placed, `start[id]` is the
