@@ -326,6 +326,19 @@ impl NeighborList {
         &self.last_rotations
     }
 
+    /// Calls `f(i, k)` for every live pair `k` (with history) of the rows `0..rows`, in
+    /// list order; plain loops, as an iterator chain compiled to slower code here.
+    #[inline(always)]
+    fn for_each_live(&self, rows: usize, mut f: impl FnMut(usize, usize)) {
+        for i in 0..rows {
+            for k in self.offsets[i] as usize..self.offsets[i + 1] as usize {
+                if self.active[k] {
+                    f(i, k);
+                }
+            }
+        }
+    }
+
     /// Live contact histories of the list as it stood before this build (whose slot `s`
     /// is now slot `new_slot[s]`, `order` listing the old slot of each new one), keyed by
     /// `(lower new slot, higher new slot, wedge turns of the higher seen from the lower)`
@@ -359,35 +372,26 @@ impl NeighborList {
             }),
             _ => h,
         };
-        for i in 0..rows {
-            for k in self.offsets[i] as usize..self.offsets[i + 1] as usize {
-                if self.active[k] {
-                    let (a, b) = (new_slot[i], new_slot[self.partner[k] as usize]);
-                    carried.count(a.min(b));
-                }
-            }
-        }
+        self.for_each_live(rows, |i, k| {
+            let (a, b) = (new_slot[i], new_slot[self.partner[k] as usize]);
+            carried.count(a.min(b));
+        });
         carried.start_filling();
-        for i in 0..rows {
-            for k in self.offsets[i] as usize..self.offsets[i + 1] as usize {
-                if !self.active[k] {
-                    continue;
-                }
-                let (a, b) = (new_slot[i], new_slot[self.partner[k] as usize]);
-                let h = self.history.get(k);
-                let c = domain.image_turns(self.image[k]);
-                // b's image `R(cΦ) r_b` lies next to `r_a`; after the wraps
-                // `r_a → R(−t_a Φ) r_a`, `r_b → R(−t_b Φ) r_b` it is `R((c − t_a + t_b) Φ) r_b`:
-                // the key's turns are `c − t_a + t_b` (the signs of `t` were once reversed,
-                // which lost the history of every pair whose particle wrapped through a face).
-                if a < b {
-                    carried.fill(a, b, c - turn(a) + turn(b), into_frame(h, a));
-                } else {
-                    let seen_from_b = h.rotated_back(&images[self.image[k] as usize]).flipped();
-                    carried.fill(b, a, -c - turn(b) + turn(a), into_frame(seen_from_b, b));
-                }
+        self.for_each_live(rows, |i, k| {
+            let (a, b) = (new_slot[i], new_slot[self.partner[k] as usize]);
+            let h = self.history.get(k);
+            let c = domain.image_turns(self.image[k]);
+            // b's image `R(cΦ) r_b` lies next to `r_a`; after the wraps `r_a → R(−t_a Φ) r_a`,
+            // `r_b → R(−t_b Φ) r_b` it is `R((c − t_a + t_b) Φ) r_b`: the key's turns are
+            // `c − t_a + t_b` (the signs of `t` were once reversed, which lost the
+            // history of every pair whose particle wrapped through a face).
+            if a < b {
+                carried.fill(a, b, c - turn(a) + turn(b), into_frame(h, a));
+            } else {
+                let seen_from_b = h.rotated_back(&images[self.image[k] as usize]).flipped();
+                carried.fill(b, a, -c - turn(b) + turn(a), into_frame(seen_from_b, b));
             }
-        }
+        });
         carried
     }
 
