@@ -80,6 +80,27 @@ pub fn pair_forces<O: ContactObserver>(
     team: &Team,
 ) -> O {
     let n = particles.len();
+    // The loop reads the particle arrays and the pair slots without bounds checks: every
+    // index it uses comes from the list, so the list must fit the particles.
+    assert!(
+        list.fits(n),
+        "the neighbour list does not fit the {n} particles: rebuild it before evaluating forces"
+    );
+    let p = &*particles;
+    assert!(
+        [
+            p.position.len(),
+            p.velocity.len(),
+            p.angular_velocity.len(),
+            p.radius.len(),
+            p.inv_mass.len(),
+            p.force.len(),
+            p.torque.len(),
+        ]
+        .iter()
+        .all(|&len| len == n),
+        "particle arrays of unequal lengths"
+    );
     let chunks = team.threads().min(n.max(1));
     let bounds = list.chunk_bounds(chunks);
     let slices = list.slices();
@@ -281,15 +302,22 @@ fn chunk_forces_generic<O: ContactObserver>(
     for i in range {
         let mut stale = false;
         for k in inp.offsets[i] as usize..inp.offsets[i + 1] as usize {
-            let (c, inside) = inp.candidate(i, k, base);
-            within[n] = c;
-            n += usize::from(inside);
-            stale |= active[k - base] & !inside;
+            // SAFETY: `k` is a pair of row `i` of the list, which fits the particles
+            // (checked by `pair_forces`), so `k - base < pairs`, the length of `active`;
+            // `n ≤ k - base` (it counts some of the pairs before `k`), and `within` holds
+            // at least `pairs`.
+            unsafe {
+                let (c, inside) = inp.candidate(i, k, base);
+                *at_mut(within, n) = c;
+                n += usize::from(inside);
+                stale |= at(active, k - base) & !inside;
+            }
         }
         if stale {
             for k in inp.offsets[i] as usize..inp.offsets[i + 1] as usize {
                 let local = k - base;
-                if active[local] && !inp.candidate(i, k, base).1 {
+                // SAFETY: as above.
+                if active[local] && !unsafe { inp.candidate(i, k, base) }.1 {
                     active[local] = false;
                     history.clear(local);
                 }
@@ -390,21 +418,57 @@ fn chunk_forces_generic<O: ContactObserver>(
 /// Contacts per lane group of the law.
 const LANES: usize = 4;
 
+/// `s[i]` without a bounds check.
+///
+/// # Safety
+/// `i < s.len()`.
+#[inline(always)]
+unsafe fn at<T: Copy>(s: &[T], i: usize) -> T {
+    debug_assert!(i < s.len());
+    // SAFETY: the caller guarantees `i < s.len()`.
+    unsafe { *s.get_unchecked(i) }
+}
+
+/// `&mut s[i]` without a bounds check.
+///
+/// # Safety
+/// `i < s.len()`.
+#[inline(always)]
+unsafe fn at_mut<T>(s: &mut [T], i: usize) -> &mut T {
+    debug_assert!(i < s.len());
+    // SAFETY: the caller guarantees `i < s.len()`.
+    unsafe { s.get_unchecked_mut(i) }
+}
+
 impl Inputs<'_> {
     /// List pair `k` (first partner `i`, `base` the chunk's first pair) with its branch
     /// vector, and whether it lies within reach (the contact plus the laws' range).
+    ///
+    /// # Safety
+    /// `k` is a pair of row `i` of a list that fits the particles ([`NeighborList::fits`]).
     #[inline(always)]
-    fn candidate(&self, i: usize, k: usize, base: usize) -> (Candidate, bool) {
-        let j = self.partner[k] as usize;
-        let code = self.image[k];
-        let r_j = if code == IDENTITY_IMAGE {
-            self.position[j]
-        } else {
-            self.images[code as usize].position(self.position[j])
+    unsafe fn candidate(&self, i: usize, k: usize, base: usize) -> (Candidate, bool) {
+        // SAFETY: `k` indexes the list's pairs and `i` is a slot (the caller's contract);
+        // a list that fits the particles has only slots as partners.
+        let (j, code, r_i, a_i) = unsafe {
+            let j = at(self.partner, k) as usize;
+            (
+                j,
+                at(self.image, k),
+                at(self.position, i),
+                at(self.radius, i),
+            )
         };
-        let branch = self.position[i] - r_j;
+        // SAFETY: as above.
+        let (r_j, a_j) = unsafe { (at(self.position, j), at(self.radius, j)) };
+        let r_j = if code == IDENTITY_IMAGE {
+            r_j
+        } else {
+            self.images[code as usize].position(r_j)
+        };
+        let branch = r_i - r_j;
         let d2 = branch.length_squared();
-        let reach = self.radius[i] + self.radius[j] + self.max_range;
+        let reach = a_i + a_j + self.max_range;
         let c = Candidate {
             local: (k - base) as u32,
             i: i as u32,
@@ -426,15 +490,29 @@ impl Inputs<'_> {
     /// Velocity and angular velocity of `j` seen through image `code`.
     #[inline(always)]
     fn partner_motion(&self, j: usize, code: u8) -> (DVec3, DVec3) {
+        self.through_image(code, self.velocity[j], self.omega[j])
+    }
+
+    /// A partner's velocity `v` and angular velocity `w` seen through image `code`.
+    #[inline(always)]
+    fn through_image(&self, code: u8, v: DVec3, w: DVec3) -> (DVec3, DVec3) {
         if code == IDENTITY_IMAGE {
-            (self.velocity[j], self.omega[j])
+            (v, w)
         } else {
             let image = &self.images[code as usize];
-            (
-                image.velocity(self.velocity[j]),
-                image.angular_velocity(self.omega[j]),
-            )
+            (image.velocity(v), image.angular_velocity(w))
         }
+    }
+
+    /// [`Inputs::partner_motion`] without bounds checks.
+    ///
+    /// # Safety
+    /// `j` is a slot of the particle arrays.
+    #[inline(always)]
+    unsafe fn partner_motion_unchecked(&self, j: usize, code: u8) -> (DVec3, DVec3) {
+        // SAFETY: the caller's contract.
+        let (v, w) = unsafe { (at(self.velocity, j), at(self.omega, j)) };
+        self.through_image(code, v, w)
     }
 
     /// The kinematics of a pair at distance `dist` (m; `overlap` of either sign).
@@ -455,8 +533,11 @@ impl Inputs<'_> {
 }
 
 /// Adds the forces of `pf` on `i` and (through the image) on `j`.
+///
+/// # Safety
+/// `i` and `j` are below the lengths of `force` and `torque`.
 #[inline(always)]
-fn add_pair(
+unsafe fn add_pair(
     force: &mut [DVec3],
     torque: &mut [DVec3],
     image: &ImageTransform,
@@ -464,14 +545,18 @@ fn add_pair(
     j: usize,
     pf: &PairForce,
 ) {
-    force[i] += pf.force;
-    torque[i] += pf.torque_i;
+    // SAFETY: the caller's contract.
+    let (f_i, t_i) = unsafe { (at_mut(force, i), at_mut(torque, i)) };
+    *f_i += pf.force;
+    *t_i += pf.torque_i;
+    // SAFETY: the caller's contract.
+    let (f_j, t_j) = unsafe { (at_mut(force, j), at_mut(torque, j)) };
     if image.rotation.is_none() {
-        force[j] -= pf.force;
-        torque[j] += pf.torque_j;
+        *f_j -= pf.force;
+        *t_j += pf.torque_j;
     } else {
-        force[j] -= image.vector_back(pf.force);
-        torque[j] += image.vector_back(pf.torque_j);
+        *f_j -= image.vector_back(pf.force);
+        *t_j += image.vector_back(pf.torque_j);
     }
 }
 
@@ -530,7 +615,9 @@ fn apart_batch<O: ContactObserver>(
             ..PairForce::default()
         };
         let image = &inp.images[c.code as usize];
-        add_pair(force, torque, image, i, j, &pf);
+        // SAFETY: the pair was found in a list that fits the particles, and `force` and
+        // `torque` hold one entry per particle (checked by `pair_forces`).
+        unsafe { add_pair(force, torque, image, i, j, &pf) };
         if O::OBSERVES {
             obs.visit(&ContactView {
                 ids: [inp.id[i], inp.id[j]],
@@ -568,22 +655,27 @@ fn touch_batch<O: ContactObserver>(
     let rotation = kernel.resists_rotation();
     for l in 0..LANES {
         let c = batch.get(l).unwrap_or(&batch[0]);
-        let (i, j) = (c.i as usize, c.j as usize);
-        let (v_j, w_j) = inp.partner_motion(j, c.code);
-        pair.normal.set_lane(l, c.branch);
-        dist.0[l] = c.dist;
-        pair.radius_i.0[l] = inp.radius[i];
-        pair.radius_j.0[l] = inp.radius[j];
-        sum.0[l] = inp.radius[i] + inp.radius[j];
-        pair.velocity.set_lane(
-            l,
-            inp.velocity[i] - v_j - DVec3::new(inp.flow_rate * c.branch.y, 0.0, 0.0),
-        );
-        pair.omega_i.set_lane(l, inp.omega[i]);
-        pair.omega_j.set_lane(l, w_j);
-        inv_mass.0[l] = inp.inv_mass[i] + inp.inv_mass[j];
-        let local = c.local as usize;
-        springs.tangential.set_lane(l, history.tangential[local]);
+        let (i, j, local) = (c.i as usize, c.j as usize, c.local as usize);
+        // SAFETY: the pair was found in a list that fits the particles (checked by
+        // `pair_forces`): `i` and `j` are slots, `local` a pair of the chunk's slices.
+        unsafe {
+            let (v_j, w_j) = inp.partner_motion_unchecked(j, c.code);
+            pair.normal.set_lane(l, c.branch);
+            dist.0[l] = c.dist;
+            pair.radius_i.0[l] = at(inp.radius, i);
+            pair.radius_j.0[l] = at(inp.radius, j);
+            sum.0[l] = at(inp.radius, i) + at(inp.radius, j);
+            pair.velocity.set_lane(
+                l,
+                at(inp.velocity, i) - v_j - DVec3::new(inp.flow_rate * c.branch.y, 0.0, 0.0),
+            );
+            pair.omega_i.set_lane(l, at(inp.omega, i));
+            pair.omega_j.set_lane(l, w_j);
+            inv_mass.0[l] = at(inp.inv_mass, i) + at(inp.inv_mass, j);
+            springs
+                .tangential
+                .set_lane(l, at(history.tangential, local));
+        }
         if rotation {
             springs.rolling.set_lane(l, history.rolling[local]);
             springs.torsion.set_lane(l, history.torsion[local]);
@@ -596,7 +688,8 @@ fn touch_batch<O: ContactObserver>(
     let f = kernel.touching_lanes::<F4, false>(&pair, &mut springs, inp.dt);
     for (l, c) in batch.iter().enumerate() {
         let (i, j, local) = (c.i as usize, c.j as usize, c.local as usize);
-        history.tangential[local] = springs.tangential.lane(l);
+        // SAFETY: `local` is a pair of the chunk's slices (see above).
+        unsafe { *at_mut(history.tangential, local) = springs.tangential.lane(l) };
         if rotation {
             history.rolling[local] = springs.rolling.lane(l);
             history.torsion[local] = springs.torsion.lane(l);
@@ -604,7 +697,8 @@ fn touch_batch<O: ContactObserver>(
         if kernel.needs_bridge() {
             history.bridge[local] = true;
         }
-        active[local] = true;
+        // SAFETY: as above.
+        unsafe { *at_mut(active, local) = true };
         let pf = PairForce {
             force: f.force.lane(l),
             torque_i: f.torque_i.lane(l),
@@ -614,7 +708,9 @@ fn touch_batch<O: ContactObserver>(
             sliding: f.sliding[l],
         };
         let image = &inp.images[c.code as usize];
-        add_pair(force, torque, image, i, j, &pf);
+        // SAFETY: `i` and `j` are slots, and `force` and `torque` hold one entry per
+        // particle (checked by `pair_forces`).
+        unsafe { add_pair(force, torque, image, i, j, &pf) };
         if O::OBSERVES {
             let kin = PairKinematics {
                 normal: pair.normal.lane(l),

@@ -98,6 +98,10 @@ pub struct NeighborList {
     carried: CarriedHistory,
     /// Number of builds so far.
     pub builds: u64,
+    /// The particle count the list's structure was last found to fit ([`NeighborList::fits`]);
+    /// cleared by every build.
+    #[serde(skip)]
+    fits_count: Option<usize>,
 }
 
 /// Read-only and mutable views of the list used by the force loop.
@@ -132,6 +136,32 @@ impl NeighborList {
     /// Whether the list has no pairs.
     pub fn is_empty(&self) -> bool {
         self.partner.is_empty()
+    }
+
+    /// Whether the list's structure fits `n` particles: `n + 1` non-decreasing row offsets
+    /// from zero to the pair count, one image code (below `IMAGE_COUNT`), activity flag and
+    /// history slot per pair, and every partner a slot below `n`. The force loop reads the
+    /// particle arrays and the pair slots without bounds checks on this guarantee. The
+    /// answer is remembered until the next build, so the scan runs once per build (or per
+    /// list read from a checkpoint).
+    pub fn fits(&mut self, n: usize) -> bool {
+        if self.fits_count == Some(n) {
+            return true;
+        }
+        let pairs = self.partner.len();
+        let fits = self.offsets.len() == n + 1
+            && self.offsets[0] == 0
+            && self.offsets.windows(2).all(|w| w[0] <= w[1])
+            && self.offsets[n] as usize == pairs
+            && self.image.len() == pairs
+            && self.active.len() == pairs
+            && self.history.len() == pairs
+            && self.partner.iter().all(|&j| (j as usize) < n)
+            && self.image.iter().all(|&c| usize::from(c) < IMAGE_COUNT);
+        if fits {
+            self.fits_count = Some(n);
+        }
+        fits
     }
 
     /// Views for the force loop.
@@ -200,6 +230,7 @@ impl NeighborList {
         domain: &Domain,
         team: &Team,
     ) -> Result<(), NeighborError> {
+        self.fits_count = None;
         // Wrap first, remembering the wedge turns of every particle (by id) so that the
         // history of a pair follows its particles through the faces.
         let images = domain.image_transforms();
@@ -793,5 +824,85 @@ impl CellGrid {
             cc[a] = x as usize;
         }
         Some((cc[0] + self.dims[0] * (cc[1] + self.dims[1] * cc[2]), img))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::particles::Sphere;
+
+    /// Eight spheres of radius 0.5 on a line through a periodic box, each touching the next.
+    fn chain() -> (Particles, Domain) {
+        let mut p = Particles::default();
+        for k in 0..8 {
+            p.push(
+                Sphere {
+                    position: DVec3::new(0.95 * k as f64 + 0.5, 2.0, 2.0),
+                    velocity: DVec3::ZERO,
+                    angular_velocity: DVec3::ZERO,
+                    radius: 0.5,
+                    species: 0,
+                    motion: Motion::Free,
+                },
+                1.0,
+            );
+        }
+        let domain = Domain::new(DVec3::ZERO, DVec3::new(7.6, 4.0, 4.0), [true; 3]);
+        (p, domain)
+    }
+
+    #[test]
+    fn a_built_list_fits_its_particles_and_nothing_else() {
+        let (mut p, domain) = chain();
+        let team = Team::new(1);
+        let mut list = NeighborList::new(0.1, 0.0);
+        list.build(&mut p, &domain, &team).expect("list");
+        assert!(
+            list.len() >= 8,
+            "the chain's pairs, the periodic one included"
+        );
+        assert!(list.fits(8));
+        assert!(!list.fits(7) && !list.fits(9));
+        // A partner that is no slot (as a damaged checkpoint could hold) is refused.
+        list.fits_count = None;
+        list.partner[0] = 8;
+        assert!(!list.fits(8));
+        // A rebuild forgets the answer and finds a fitting list again.
+        list.build(&mut p, &domain, &team).expect("list");
+        assert_eq!(list.fits_count, None);
+        assert!(list.fits(8));
+    }
+
+    #[test]
+    #[should_panic(expected = "does not fit")]
+    fn forces_refuse_a_list_of_other_particles() {
+        let (mut p, domain) = chain();
+        let team = Team::new(1);
+        let mut list = NeighborList::new(0.1, 0.0);
+        list.build(&mut p, &domain, &team).expect("list");
+        let extra = p.sphere(0);
+        p.push(extra, 1.0);
+        use crate::contact::{Adhesion, ContactLaw, Damping, NormalLaw, Resistance};
+        let law = ContactLaw {
+            normal: NormalLaw {
+                stiffness: 1.0e4,
+                damping: Damping::NONE,
+            },
+            tangential: Resistance::NONE,
+            rolling: Resistance::NONE,
+            torsion: Resistance::NONE,
+            adhesion: Adhesion::None,
+        };
+        crate::forces::pair_forces::<()>(
+            &mut p,
+            &mut list,
+            &crate::contact::ContactTable::uniform(1, law),
+            &domain.image_transforms(),
+            0.0,
+            1e-4,
+            &mut crate::forces::ForceScratch::default(),
+            &team,
+        );
     }
 }
