@@ -301,11 +301,13 @@ fn chunk_forces_generic<O: ContactObserver>(
     let mut n = 0;
     for i in range {
         let mut stale = false;
-        for k in inp.offsets[i] as usize..inp.offsets[i + 1] as usize {
-            // SAFETY: `k` is a pair of row `i` of the list, which fits the particles
-            // (checked by `pair_forces`), so `k - base < pairs`, the length of `active`;
-            // `n ≤ k - base` (it counts some of the pairs before `k`), and `within` holds
-            // at least `pairs`.
+        // SAFETY: `i` is a slot and the list, which fits the particles (checked by
+        // `pair_forces`), has `n + 1` row offsets.
+        let row = unsafe { at(inp.offsets, i) as usize..at(inp.offsets, i + 1) as usize };
+        for k in row {
+            // SAFETY: `k` is a pair of row `i` of the list, so `k - base < pairs`, the
+            // length of `active`; `n ≤ k - base` (it counts some of the pairs before `k`),
+            // and `within` holds at least `pairs`.
             unsafe {
                 let (c, inside) = inp.candidate(i, k, base);
                 *at_mut(within, n) = c;
@@ -327,9 +329,19 @@ fn chunk_forces_generic<O: ContactObserver>(
     // Pass 1b: touching pairs, and pairs apart within an adhesive law's range.
     touching.clear();
     apart.clear();
+    // With one species, every pair has the same kernel.
+    let only_kernel = (inp.laws.species() == 1).then(|| inp.laws.kernel(0, 0));
     for c in &within[..n] {
-        let (i, j) = (c.i as usize, c.j as usize);
-        let sum = inp.radius[i] + inp.radius[j];
+        let (i, j, local) = (c.i as usize, c.j as usize, c.local as usize);
+        // SAFETY: the pair was found in the list, which fits the particles: `i` and `j`
+        // are slots, `local` a pair of the chunk's slices.
+        let (sum, bridged, was_active) = unsafe {
+            (
+                at(inp.radius, i) + at(inp.radius, j),
+                at(history.bridge, local),
+                at(active, local),
+            )
+        };
         let dist = c.d2.sqrt();
         let pair = Touching {
             local: c.local,
@@ -339,12 +351,15 @@ fn chunk_forces_generic<O: ContactObserver>(
             branch: c.branch,
             dist,
         };
-        let local = c.local as usize;
         if sum - dist >= 0.0 {
             touching.push(pair);
-        } else if history.bridge[local] || !inp.kernel_of(&pair).needs_bridge() {
+        } else if bridged
+            || !only_kernel
+                .unwrap_or_else(|| inp.kernel_of(&pair))
+                .needs_bridge()
+        {
             apart.push(pair);
-        } else if active[local] {
+        } else if was_active {
             // Apart without a bridge under an irreversible law: no force.
             active[local] = false;
             history.clear(local);
@@ -584,10 +599,14 @@ fn apart_batch<O: ContactObserver>(
         let (i, j) = (c.i as usize, c.j as usize);
         branch.set_lane(l, c.branch);
         dist.0[l] = c.dist;
-        radius_i.0[l] = inp.radius[i];
-        radius_j.0[l] = inp.radius[j];
-        sum.0[l] = inp.radius[i] + inp.radius[j];
-        *bridged = history.bridge[c.local as usize];
+        // SAFETY: the pair was found in a list that fits the particles (checked by
+        // `pair_forces`): `i` and `j` are slots, `local` a pair of the chunk's slices.
+        unsafe {
+            radius_i.0[l] = at(inp.radius, i);
+            radius_j.0[l] = at(inp.radius, j);
+            sum.0[l] = at(inp.radius, i) + at(inp.radius, j);
+            *bridged = at(history.bridge, c.local as usize);
+        }
     }
     let normal = branch.scale(F4::splat(1.0) / dist);
     let separation = -(sum - dist);
@@ -597,18 +616,20 @@ fn apart_batch<O: ContactObserver>(
         let (i, j, local) = (c.i as usize, c.j as usize, c.local as usize);
         // The springs relax. Those of rotation stay zero under a law without them, so
         // their slots (a cache line each) are left untouched.
-        history.tangential[local] = DVec3::ZERO;
-        if rotation {
-            history.rolling[local] = DVec3::ZERO;
-            history.torsion[local] = DVec3::ZERO;
+        // SAFETY: `local` is a pair of the chunk's slices (see above).
+        unsafe {
+            *at_mut(history.tangential, local) = DVec3::ZERO;
+            if rotation {
+                *at_mut(history.rolling, local) = DVec3::ZERO;
+                *at_mut(history.torsion, local) = DVec3::ZERO;
+            }
+            *at_mut(history.bridge, local) = alive[l];
+            *at_mut(active, local) = f_a.0[l] != 0.0;
         }
-        history.bridge[local] = alive[l];
         let f = f_a.0[l];
         if f == 0.0 {
-            active[local] = false;
             continue;
         }
-        active[local] = true;
         let pf = PairForce {
             force: normal.lane(l) * f,
             adhesive: f,
@@ -694,11 +715,13 @@ fn touch_batch<O: ContactObserver>(
             history.rolling[local] = springs.rolling.lane(l);
             history.torsion[local] = springs.torsion.lane(l);
         }
-        if kernel.needs_bridge() {
-            history.bridge[local] = true;
-        }
         // SAFETY: as above.
-        unsafe { *at_mut(active, local) = true };
+        unsafe {
+            if kernel.needs_bridge() {
+                *at_mut(history.bridge, local) = true;
+            }
+            *at_mut(active, local) = true;
+        }
         let pf = PairForce {
             force: f.force.lane(l),
             torque_i: f.torque_i.lane(l),
