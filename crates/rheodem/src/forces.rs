@@ -37,6 +37,9 @@ pub struct ForceScratch {
 struct Found {
     /// Pairs within reach (the first `n` entries of a step; never shrunk).
     within: Vec<Candidate>,
+    /// Pairs that had a force and are now out of reach (the first entries of a step;
+    /// never shrunk).
+    lost: Vec<u32>,
     /// Touching pairs.
     touching: Vec<Touching>,
     /// Pairs apart within the interaction range (adhesive laws).
@@ -54,6 +57,7 @@ struct Inputs<'a> {
     inv_mass: &'a [f64],
     species: &'a [u16],
     offsets: &'a [u32],
+    first: &'a [u32],
     partner: &'a [u32],
     image: &'a [u8],
     images: &'a [ImageTransform; IMAGE_COUNT],
@@ -114,6 +118,7 @@ pub fn pair_forces<O: ContactObserver>(
         inv_mass: &particles.inv_mass,
         species: &particles.species,
         offsets: slices.offsets,
+        first: slices.first,
         partner: slices.partner,
         image: slices.image,
         images,
@@ -287,44 +292,40 @@ fn chunk_forces_generic<O: ContactObserver>(
     let base = inp.offsets[range.start] as usize;
     let Found {
         within,
+        lost,
         touching,
         apart,
     } = found;
     // Pass 1a: every pair within reach, compacted without a branch on the distance test
-    // (about half the list pairs touch, so that branch would be unpredictable). A pair
-    // that had a force and is now out of reach (rare) drops its history: such pairs are
-    // only flagged per particle here, and found again in a second look at its pairs.
-    let pairs = inp.offsets[range.end] as usize - base;
+    // (about half the list pairs touch, so that branch would be unpredictable), in one
+    // flat loop over the chunk's pairs (a loop per row would end at an unpredictable
+    // length). A pair that had a force and is now out of reach drops its history.
+    let end = inp.offsets[range.end] as usize;
+    let pairs = end - base;
     if within.len() < pairs {
         within.resize(pairs, Candidate::default());
     }
-    let mut n = 0;
-    for i in range {
-        let mut stale = false;
-        // SAFETY: `i` is a slot and the list, which fits the particles (checked by
-        // `pair_forces`), has `n + 1` row offsets.
-        let row = unsafe { at(inp.offsets, i) as usize..at(inp.offsets, i + 1) as usize };
-        for k in row {
-            // SAFETY: `k` is a pair of row `i` of the list, so `k - base < pairs`, the
-            // length of `active`; `n ≤ k - base` (it counts some of the pairs before `k`),
-            // and `within` holds at least `pairs`.
-            unsafe {
-                let (c, inside) = inp.candidate(i, k, base);
-                *at_mut(within, n) = c;
-                n += usize::from(inside);
-                stale |= at(active, k - base) & !inside;
-            }
+    if lost.len() < pairs {
+        lost.resize(pairs, 0);
+    }
+    let (mut n, mut n_lost) = (0, 0);
+    for k in base..end {
+        // SAFETY: `k` is a pair of the chunk, so `k - base < pairs`, the length of
+        // `active`; the list fits the particles (checked by `pair_forces`), so its row
+        // `first[k]` is a slot; `n` and `n_lost` are at most `k - base` (each counts some
+        // of the pairs before `k`), and `within` and `lost` hold at least `pairs`.
+        unsafe {
+            let local = k - base;
+            let (c, inside) = inp.candidate(at(inp.first, k) as usize, k, base);
+            *at_mut(within, n) = c;
+            n += usize::from(inside);
+            *at_mut(lost, n_lost) = local as u32;
+            n_lost += usize::from(at(active, local) & !inside);
         }
-        if stale {
-            for k in inp.offsets[i] as usize..inp.offsets[i + 1] as usize {
-                let local = k - base;
-                // SAFETY: as above.
-                if active[local] && !unsafe { inp.candidate(i, k, base) }.1 {
-                    active[local] = false;
-                    history.clear(local);
-                }
-            }
-        }
+    }
+    for &local in &lost[..n_lost] {
+        active[local as usize] = false;
+        history.clear(local as usize);
     }
     // Pass 1b: touching pairs, and pairs apart within an adhesive law's range.
     touching.clear();

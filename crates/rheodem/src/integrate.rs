@@ -25,8 +25,10 @@ pub fn kick(p: &mut Particles, h: f64, team: &Team) {
         .zip(p.inv_mass.chunks(len).zip(p.inv_inertia.chunks(len)))
         .collect();
     team.for_each(&mut pieces, |(((v, w), (f, t)), (im, ii))| {
-        for k in 0..v.len() {
-            kick_one(&mut v[k], &mut w[k], f[k], t[k], im[k], ii[k], h);
+        // Zipped, so that no access is bounds-checked.
+        let rates = f.iter().zip(t.iter()).zip(im.iter().zip(ii.iter()));
+        for ((v, w), ((f, t), (im, ii))) in v.iter_mut().zip(w.iter_mut()).zip(rates) {
+            kick_one(v, w, *f, *t, *im, *ii, h);
         }
     });
 }
@@ -49,8 +51,9 @@ pub fn drift(p: &mut Particles, dt: f64, team: &Team) {
         .zip(p.motion.chunks(len))
         .collect();
     team.for_each(&mut pieces, |(((r, v), w), motion)| {
-        for k in 0..r.len() {
-            drift_one(&mut r[k], &mut v[k], &mut w[k], &motion[k], dt);
+        let state = r.iter_mut().zip(v.iter_mut()).zip(w.iter_mut());
+        for (((r, v), w), motion) in state.zip(motion.iter()) {
+            drift_one(r, v, w, motion, dt);
         }
     });
 }
@@ -71,9 +74,12 @@ pub fn kick_drift(p: &mut Particles, h: f64, dt: f64, team: &Team) {
     team.for_each(
         &mut pieces,
         |(((((r, v), w), motion), (f, t)), (im, ii))| {
-            for k in 0..r.len() {
-                kick_one(&mut v[k], &mut w[k], f[k], t[k], im[k], ii[k], h);
-                drift_one(&mut r[k], &mut v[k], &mut w[k], &motion[k], dt);
+            // Zipped, so that no access is bounds-checked.
+            let state = r.iter_mut().zip(v.iter_mut()).zip(w.iter_mut());
+            let rates = f.iter().zip(t.iter()).zip(im.iter().zip(ii.iter()));
+            for (((r, v), w), (motion, ((f, t), (im, ii)))) in state.zip(motion.iter().zip(rates)) {
+                kick_one(v, w, *f, *t, *im, *ii, h);
+                drift_one(r, v, w, motion, dt);
             }
         },
     );
@@ -112,9 +118,9 @@ pub fn add_gravity(p: &mut Particles, g: DVec3, team: &Team) {
         .zip(p.mass.chunks(len).zip(p.motion.chunks(len)))
         .collect();
     team.for_each(&mut pieces, |(f, (m, motion))| {
-        for k in 0..f.len() {
-            if motion[k].is_free() {
-                f[k] += g * m[k];
+        for ((f, m), motion) in f.iter_mut().zip(m.iter()).zip(motion.iter()) {
+            if motion.is_free() {
+                *f += g * *m;
             }
         }
     });

@@ -74,6 +74,27 @@ const BUILD_BLOCK: usize = 256;
 /// Particles whose displacements the skin check compares side by side.
 const TOP_LANES: usize = 8;
 
+/// The larger of `a.0` and `d`, and the larger of the rest: the two largest values seen,
+/// without a branch.
+#[inline(always)]
+fn top2((a0, a1): (f64, f64), d: f64) -> (f64, f64) {
+    (a0.max(d), a1.max(a0.min(d)))
+}
+
+/// The two largest of `moved(r[k], r0[k])` over the particles `k` (squared displacements,
+/// m²), kept in [`TOP_LANES`] running pairs so that the maxima do not wait on each other.
+#[inline(always)]
+fn two_largest(r: &[DVec3], r0: &[DVec3], moved: impl Fn(&DVec3, &DVec3) -> f64) -> (f64, f64) {
+    let mut acc = [(0.0f64, 0.0f64); TOP_LANES];
+    for (r, r0) in r.chunks(TOP_LANES).zip(r0.chunks(TOP_LANES)) {
+        for ((a, r), r0) in acc.iter_mut().zip(r).zip(r0) {
+            *a = top2(*a, moved(r, r0));
+        }
+    }
+    acc.into_iter()
+        .fold((0.0, 0.0), |a, b| top2(top2(a, b.0), b.1))
+}
+
 /// Verlet list with contact history.
 #[derive(Clone, Debug, Default, Serialize, Deserialize)]
 pub struct NeighborList {
@@ -102,12 +123,18 @@ pub struct NeighborList {
     /// cleared by every build.
     #[serde(skip)]
     fits_count: Option<usize>,
+    /// The first slot `i` (the row) of each pair, written by [`NeighborList::fits`] from
+    /// the row offsets, so that the force loop walks the pairs in one flat loop.
+    #[serde(skip)]
+    first: Vec<u32>,
 }
 
 /// Read-only and mutable views of the list used by the force loop.
 pub struct PairSlices<'a> {
     /// Row offsets: the pairs of slot `i` are `offsets[i]..offsets[i + 1]`.
     pub offsets: &'a [u32],
+    /// First slot `i` of each pair (its row).
+    pub first: &'a [u32],
     /// Partner slot `j` of each pair.
     pub partner: &'a [u32],
     /// Image code of `j` for each pair.
@@ -143,7 +170,7 @@ impl NeighborList {
     /// history slot per pair, and every partner a slot below `n`. The force loop reads the
     /// particle arrays and the pair slots without bounds checks on this guarantee. The
     /// answer is remembered until the next build, so the scan runs once per build (or per
-    /// list read from a checkpoint).
+    /// list read from a checkpoint). A list that fits also learns the row of each pair.
     pub fn fits(&mut self, n: usize) -> bool {
         if self.fits_count == Some(n) {
             return true;
@@ -159,6 +186,12 @@ impl NeighborList {
             && self.partner.iter().all(|&j| (j as usize) < n)
             && self.image.iter().all(|&c| usize::from(c) < IMAGE_COUNT);
         if fits {
+            self.first.clear();
+            self.first.reserve(pairs);
+            for (i, row) in self.offsets.windows(2).enumerate() {
+                let len = (row[1] - row[0]) as usize;
+                self.first.extend(std::iter::repeat_n(i as u32, len));
+            }
             self.fits_count = Some(n);
         }
         fits
@@ -168,6 +201,7 @@ impl NeighborList {
     pub fn slices(&mut self) -> PairSlices<'_> {
         PairSlices {
             offsets: &self.offsets,
+            first: &self.first,
             partner: &self.partner,
             image: &self.image,
             active: &mut self.active,
@@ -191,10 +225,10 @@ impl NeighborList {
         // The two largest non-affine displacements (squared); max is order-independent, so
         // the parallel reduction is deterministic.
         let lo = self.reference_lo;
-        // Branch-free: the larger of the two and the larger of the rest.
-        let top2 = |(a0, a1): (f64, f64), d: f64| (a0.max(d), a1.max(a0.min(d)));
-        // Eight running pairs per task, so that the maxima do not wait on each other.
         let moved = |r: &DVec3, r0: &DVec3| (*r - *r0 - affine * (*r0 - lo)).length_squared();
+        // Without deformation since the build the affine part is exactly zero: the same
+        // displacements without the matrix product.
+        let rigid = affine == DMat3::ZERO;
         let len = team.piece_len(particles.len(), PARTICLES_PER_TASK);
         let mut pieces: Vec<_> = particles
             .position
@@ -203,15 +237,11 @@ impl NeighborList {
             .map(|(r, r0)| (r, r0, (0.0f64, 0.0f64)))
             .collect();
         team.for_each(&mut pieces, |(r, r0, top)| {
-            let mut acc = [(0.0f64, 0.0f64); TOP_LANES];
-            for (r, r0) in r.chunks(TOP_LANES).zip(r0.chunks(TOP_LANES)) {
-                for ((a, r), r0) in acc.iter_mut().zip(r).zip(r0) {
-                    *a = top2(*a, moved(r, r0));
-                }
-            }
-            *top = acc
-                .into_iter()
-                .fold((0.0, 0.0), |a, b| top2(top2(a, b.0), b.1));
+            *top = if rigid {
+                two_largest(r, r0, |r, r0| (*r - *r0).length_squared())
+            } else {
+                two_largest(r, r0, moved)
+            };
         });
         let (first, second) = pieces
             .iter()
@@ -872,6 +902,30 @@ mod tests {
         list.build(&mut p, &domain, &team).expect("list");
         assert_eq!(list.fits_count, None);
         assert!(list.fits(8));
+    }
+
+    #[test]
+    fn a_fitting_list_knows_the_row_of_every_pair_even_after_a_checkpoint() {
+        let (mut p, domain) = chain();
+        let team = Team::new(1);
+        let mut list = NeighborList::new(0.1, 0.0);
+        list.build(&mut p, &domain, &team).expect("list");
+        let rows = |list: &NeighborList| -> Vec<u32> {
+            (0..8u32)
+                .flat_map(|i| {
+                    let (lo, hi) = (list.offsets[i as usize], list.offsets[i as usize + 1]);
+                    (lo..hi).map(move |_| i)
+                })
+                .collect()
+        };
+        assert!(list.fits(8));
+        assert_eq!(list.first, rows(&list));
+        // A list read back from a checkpoint has no rows until it is found to fit.
+        let bytes = rmp_serde::to_vec_named(&list).expect("serialise");
+        let mut read: NeighborList = rmp_serde::from_slice(&bytes).expect("deserialise");
+        assert!(read.first.is_empty() && read.fits_count.is_none());
+        assert!(read.fits(8));
+        assert_eq!(read.first, rows(&list));
     }
 
     #[test]
