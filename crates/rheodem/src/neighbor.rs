@@ -227,8 +227,13 @@ impl NeighborList {
         let lo = self.reference_lo;
         let moved = |r: &DVec3, r0: &DVec3| (*r - *r0 - affine * (*r0 - lo)).length_squared();
         // Without deformation since the build the affine part is exactly zero: the same
-        // displacements without the matrix product.
+        // displacements without the matrix product. Under simple shear along x with the
+        // gradient along y, and a height that follows the stress, only the matrix's y
+        // column moves: the product is that column times `r₀.y − lo.y` (the other columns'
+        // terms are zeros, which change no square).
         let rigid = affine == DMat3::ZERO;
+        let y_only = affine.x_axis == DVec3::ZERO && affine.z_axis == DVec3::ZERO;
+        let column = affine.y_axis;
         let len = team.piece_len(particles.len(), PARTICLES_PER_TASK);
         let mut pieces: Vec<_> = particles
             .position
@@ -239,6 +244,10 @@ impl NeighborList {
         team.for_each(&mut pieces, |(r, r0, top)| {
             *top = if rigid {
                 two_largest(r, r0, |r, r0| (*r - *r0).length_squared())
+            } else if y_only {
+                two_largest(r, r0, |r, r0| {
+                    (*r - *r0 - column * (r0.y - lo.y)).length_squared()
+                })
             } else {
                 two_largest(r, r0, moved)
             };
