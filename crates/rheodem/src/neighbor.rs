@@ -891,12 +891,18 @@ mod tests {
         (p, domain)
     }
 
-    #[test]
-    fn a_built_list_fits_its_particles_and_nothing_else() {
+    /// The chain and its list, built once with a skin of 0.1.
+    fn built_chain() -> (Particles, Domain, Team, NeighborList) {
         let (mut p, domain) = chain();
         let team = Team::new(1);
         let mut list = NeighborList::new(0.1, 0.0);
         list.build(&mut p, &domain, &team).expect("list");
+        (p, domain, team, list)
+    }
+
+    #[test]
+    fn a_built_list_fits_its_particles_and_nothing_else() {
+        let (mut p, domain, team, mut list) = built_chain();
         assert!(
             list.len() >= 8,
             "the chain's pairs, the periodic one included"
@@ -915,10 +921,7 @@ mod tests {
 
     #[test]
     fn a_fitting_list_knows_the_row_of_every_pair_even_after_a_checkpoint() {
-        let (mut p, domain) = chain();
-        let team = Team::new(1);
-        let mut list = NeighborList::new(0.1, 0.0);
-        list.build(&mut p, &domain, &team).expect("list");
+        let (_, _, _, mut list) = built_chain();
         let rows = |list: &NeighborList| -> Vec<u32> {
             (0..8u32)
                 .flat_map(|i| {
@@ -937,13 +940,74 @@ mod tests {
         assert_eq!(read.first, rows(&list));
     }
 
-    #[test]
-    #[should_panic(expected = "does not fit")]
-    fn forces_refuse_a_list_of_other_particles() {
-        let (mut p, domain) = chain();
+    /// Whether the list is stale after the box took `deformation` (from the identity at
+    /// the build), every particle followed it affinely, and the first `pushed` particles
+    /// moved 0.06 (0.6 of the skin) further along z.
+    fn stale_after(deformation: DMat3, pushed: usize) -> bool {
+        let mut p = Particles::default();
+        for k in 0..6 {
+            let position = DVec3::new(6.5 - k as f64, 1.0 + 0.9 * k as f64, 3.0);
+            p.push(
+                Sphere {
+                    position,
+                    velocity: DVec3::ZERO,
+                    angular_velocity: DVec3::ZERO,
+                    radius: 0.3,
+                    species: 0,
+                    motion: Motion::Free,
+                },
+                1.0,
+            );
+        }
+        let mut domain = Domain::new(DVec3::ZERO, DVec3::splat(8.0), [true; 3]);
         let team = Team::new(1);
         let mut list = NeighborList::new(0.1, 0.0);
         list.build(&mut p, &domain, &team).expect("list");
+        domain.deformation = deformation;
+        let affine = deformation - DMat3::IDENTITY;
+        for (k, r) in p.position.iter_mut().enumerate() {
+            *r += affine * (*r - domain.lo);
+            if k < pushed {
+                r.z += 0.06;
+            }
+        }
+        list.needs_rebuild(&p, &domain, &team)
+    }
+
+    #[test]
+    fn the_skin_check_counts_only_what_departs_from_the_affine_flow() {
+        // The particles climb in y as they step back in x, so a displacement taken from
+        // the wrong coordinate shows. Rigid box, simple shear (only the y column moves: the tilt reaches 0.11 at the
+        // top particle, more than the skin), shear with a height that follows the stress,
+        // and a general deformation: each path of the check. One particle 0.6 skin off
+        // the flow keeps the list; two make 1.2 skins together and renew it.
+        let shear = DMat3::from_cols(DVec3::X, DVec3::new(0.02, 1.0, 0.0), DVec3::Z);
+        let sheared_and_lower = DMat3::from_cols(DVec3::X, DVec3::new(0.02, 0.995, 0.0), DVec3::Z);
+        let general = DMat3::from_cols(
+            DVec3::new(1.002, 0.0, 0.001),
+            DVec3::new(0.02, 1.0, 0.0),
+            DVec3::Z,
+        );
+        for deformation in [DMat3::IDENTITY, shear, sheared_and_lower, general] {
+            assert!(
+                !stale_after(deformation, 0),
+                "{deformation}: affine flow alone"
+            );
+            assert!(
+                !stale_after(deformation, 1),
+                "{deformation}: one particle off"
+            );
+            assert!(
+                stale_after(deformation, 2),
+                "{deformation}: two particles off"
+            );
+        }
+    }
+
+    #[test]
+    #[should_panic(expected = "does not fit")]
+    fn forces_refuse_a_list_of_other_particles() {
+        let (mut p, domain, team, mut list) = built_chain();
         let extra = p.sphere(0);
         p.push(extra, 1.0);
         use crate::contact::{Adhesion, ContactLaw, Damping, NormalLaw, Resistance};
