@@ -40,10 +40,12 @@ struct Found {
     /// Pairs that had a force and are now out of reach (the first entries of a step;
     /// never shrunk).
     lost: Vec<u32>,
-    /// Touching pairs.
-    touching: Vec<Touching>,
-    /// Pairs apart within the interaction range (adhesive laws).
-    apart: Vec<Touching>,
+    /// Touching pairs, as indices into `within` (the first entries of a step; never
+    /// shrunk).
+    touching: Vec<u32>,
+    /// Pairs apart within the interaction range (adhesive laws), as indices into `within`
+    /// (the first entries of a step; never shrunk).
+    apart: Vec<u32>,
 }
 
 /// Read-only particle data of the loop.
@@ -207,7 +209,7 @@ pub fn pair_forces<O: ContactObserver>(
     total
 }
 
-/// A list pair within reach, before its distance is taken.
+/// A list pair within reach, found by the first pass of [`chunk_forces`].
 #[derive(Clone, Copy, Debug, Default)]
 struct Candidate {
     /// The pair's index in the chunk's slice of the list.
@@ -219,23 +221,8 @@ struct Candidate {
     code: u8,
     /// `r_i − r_j` through the image (m).
     branch: DVec3,
-    /// `|r_i − r_j|²` (m²).
-    d2: f64,
-}
-
-/// A pair within reach found by the first pass of [`chunk_forces`].
-#[derive(Clone, Copy, Debug, Default)]
-pub(crate) struct Touching {
-    /// The pair's index in the chunk's slice of the list.
-    local: u32,
-    /// Slots of `i` and `j`.
-    i: u32,
-    j: u32,
-    /// Image code of `j`.
-    code: u8,
-    /// `r_i − r_j` through the image (m).
-    branch: DVec3,
-    /// `|r_i − r_j|` (m).
+    /// `|r_i − r_j|²` (m²) as pass 1a writes it; pass 1b replaces it by its square root,
+    /// the distance `|r_i − r_j|` (m) that the contact law reads.
     dist: f64,
 }
 
@@ -327,58 +314,49 @@ fn chunk_forces_generic<O: ContactObserver>(
         active[local as usize] = false;
         history.clear(local as usize);
     }
-    // Pass 1b: touching pairs, and pairs apart within an adhesive law's range.
-    touching.clear();
-    apart.clear();
+    // Pass 1b: touching pairs, and pairs apart within an adhesive law's range, as
+    // indices into `within`, again without a branch on the distance (under an adhesive
+    // law about half the pairs within reach touch). A pair apart without a bridge under
+    // an irreversible law has no force and drops its history.
+    if touching.len() < n {
+        touching.resize(n, 0);
+        apart.resize(n, 0);
+    }
     // With one species, every pair has the same kernel.
-    let only_kernel = (inp.laws.species() == 1).then(|| inp.laws.kernel(0, 0));
-    for c in &within[..n] {
-        let (i, j, local) = (c.i as usize, c.j as usize, c.local as usize);
-        // SAFETY: the pair was found in the list, which fits the particles: `i` and `j`
-        // are slots, `local` a pair of the chunk's slices.
-        let (sum, bridged, was_active) = unsafe {
-            (
-                at(inp.radius, i) + at(inp.radius, j),
-                at(history.bridge, local),
-                at(active, local),
-            )
-        };
-        let dist = c.d2.sqrt();
-        let pair = Touching {
-            local: c.local,
-            i: c.i,
-            j: c.j,
-            code: c.code,
-            branch: c.branch,
-            dist,
-        };
-        if sum - dist >= 0.0 {
-            touching.push(pair);
-        } else if bridged
-            || !only_kernel
-                .unwrap_or_else(|| inp.kernel_of(&pair))
-                .needs_bridge()
-        {
-            apart.push(pair);
-        } else if was_active {
-            // Apart without a bridge under an irreversible law: no force.
-            active[local] = false;
-            history.clear(local);
-        }
+    let uniform = inp.laws.species() == 1;
+    let split = Split {
+        within: &mut within[..n],
+        bridge: history.bridge,
+        active,
+        touching,
+        apart,
+        lost,
+    };
+    let (n_touching, n_apart, n_lost) = if inp.laws.forms_bridges() {
+        split.run::<true>(inp, uniform)
+    } else {
+        split.run::<false>(inp, uniform)
+    };
+    for &local in &lost[..n_lost] {
+        active[local as usize] = false;
+        history.clear(local as usize);
     }
     // Pass 2: the contact law over each kind of pair, four at a time.
-    let uniform = inp.laws.species() == 1;
-    let same_kernel = |batch: &[Touching]| {
-        uniform
-            || batch
+    let within = &within[..n];
+    let same_kernel = |batch: &[u32]| {
+        uniform || {
+            let first = inp.kernel_of(&within[batch[0] as usize]);
+            batch
                 .iter()
-                .all(|c| inp.kernel_of(c) == inp.kernel_of(&batch[0]))
+                .all(|&q| inp.kernel_of(&within[q as usize]) == first)
+        }
     };
-    for batch in touching.chunks(LANES) {
+    for batch in touching[..n_touching].chunks(LANES) {
         if same_kernel(batch) {
             touch_batch::<O>(
                 inp,
-                inp.kernel_of(&batch[0]),
+                inp.kernel_of(&within[batch[0] as usize]),
+                within,
                 batch,
                 active,
                 history,
@@ -387,11 +365,12 @@ fn chunk_forces_generic<O: ContactObserver>(
                 &mut obs,
             );
         } else {
-            for c in batch {
+            for q in batch {
                 touch_batch::<O>(
                     inp,
-                    inp.kernel_of(c),
-                    std::slice::from_ref(c),
+                    inp.kernel_of(&within[*q as usize]),
+                    within,
+                    std::slice::from_ref(q),
                     active,
                     history,
                     force,
@@ -401,11 +380,12 @@ fn chunk_forces_generic<O: ContactObserver>(
             }
         }
     }
-    for batch in apart.chunks(LANES) {
+    for batch in apart[..n_apart].chunks(LANES) {
         if same_kernel(batch) {
             apart_batch::<O>(
                 inp,
-                inp.kernel_of(&batch[0]),
+                inp.kernel_of(&within[batch[0] as usize]),
+                within,
                 batch,
                 active,
                 history,
@@ -414,11 +394,12 @@ fn chunk_forces_generic<O: ContactObserver>(
                 &mut obs,
             );
         } else {
-            for c in batch {
+            for q in batch {
                 apart_batch::<O>(
                     inp,
-                    inp.kernel_of(c),
-                    std::slice::from_ref(c),
+                    inp.kernel_of(&within[*q as usize]),
+                    within,
+                    std::slice::from_ref(q),
                     active,
                     history,
                     force,
@@ -433,6 +414,76 @@ fn chunk_forces_generic<O: ContactObserver>(
 
 /// Contacts per lane group of the law.
 const LANES: usize = 4;
+
+/// Pass 1b of [`chunk_forces`]: the arrays it reads and fills.
+struct Split<'a> {
+    /// Pairs within reach; their squared distance becomes the distance.
+    within: &'a mut [Candidate],
+    /// Bridge flags of the chunk's pairs.
+    bridge: &'a [bool],
+    /// Force flags of the chunk's pairs.
+    active: &'a [bool],
+    /// Filled with the touching pairs (indices into `within`); holds at least as many.
+    touching: &'a mut [u32],
+    /// Filled with the pairs apart that the law acts on; holds at least as many as `within`.
+    apart: &'a mut [u32],
+    /// Filled with the pairs apart that lose their force; holds at least as many as
+    /// `within`.
+    lost: &'a mut [u32],
+}
+
+impl Split<'_> {
+    /// Sorts the pairs within reach into touching pairs, pairs apart that the law acts on
+    /// and pairs apart that lose their force (apart without a bridge under an
+    /// irreversible law, while they had a force), without a branch on the distance (under
+    /// an adhesive law about half the pairs within reach touch). `BRIDGES` says whether
+    /// any law of the table forms bridges (without, every pair apart goes to the law);
+    /// `uniform` that every pair has the same kernel. Returns the three counts.
+    #[inline(always)]
+    fn run<const BRIDGES: bool>(self, inp: &Inputs<'_>, uniform: bool) -> (usize, usize, usize) {
+        let Split {
+            within,
+            bridge,
+            active,
+            touching,
+            apart,
+            lost,
+        } = self;
+        assert!(touching.len() >= within.len() && apart.len() >= within.len());
+        assert!(lost.len() >= within.len());
+        let (mut n_touching, mut n_apart, mut n_lost) = (0, 0, 0);
+        for (q, c) in within.iter_mut().enumerate() {
+            let (i, j, local) = (c.i as usize, c.j as usize, c.local as usize);
+            let needs_bridge = BRIDGES && (uniform || inp.kernel_of(c).needs_bridge());
+            // SAFETY: the pair was found in the list, which fits the particles: `i` and
+            // `j` are slots, `local` a pair of the chunk's slices; `n_touching`, `n_apart`
+            // and `n_lost` are at most `q`, below the length of `within` and so of
+            // `touching`, `apart` and `lost` (asserted above).
+            unsafe {
+                let sum = at(inp.radius, i) + at(inp.radius, j);
+                c.dist = c.dist.sqrt();
+                let touches = sum - c.dist >= 0.0;
+                let acts = !needs_bridge || at(bridge, local);
+                *at_mut(touching, n_touching) = q as u32;
+                n_touching += usize::from(touches);
+                *at_mut(apart, n_apart) = q as u32;
+                n_apart += usize::from(!touches & acts);
+                if BRIDGES {
+                    *at_mut(lost, n_lost) = local as u32;
+                    n_lost += usize::from(!touches & !acts & at(active, local));
+                }
+            }
+        }
+        (n_touching, n_apart, n_lost)
+    }
+}
+
+/// The pairs of `batch` (indices into `within`), one per lane; the lanes past
+/// `batch.len()` repeat the first pair.
+#[inline(always)]
+fn lanes_of<'a>(within: &'a [Candidate], batch: &[u32]) -> [&'a Candidate; LANES] {
+    std::array::from_fn(|l| &within[*batch.get(l).unwrap_or(&batch[0]) as usize])
+}
 
 /// `s[i]` without a bounds check.
 ///
@@ -491,14 +542,14 @@ impl Inputs<'_> {
             j: j as u32,
             code,
             branch,
-            d2,
+            dist: d2,
         };
         (c, d2 < reach * reach)
     }
 
     /// The kernel of a pair.
     #[inline(always)]
-    fn kernel_of(&self, c: &Touching) -> &PairKernel {
+    fn kernel_of(&self, c: &Candidate) -> &PairKernel {
         self.laws
             .kernel(self.species[c.i as usize], self.species[c.j as usize])
     }
@@ -584,36 +635,37 @@ unsafe fn add_pair(
 fn apart_batch<O: ContactObserver>(
     inp: &Inputs<'_>,
     kernel: &PairKernel,
-    batch: &[Touching],
+    within: &[Candidate],
+    batch: &[u32],
     active: &mut [bool],
     history: &mut HistoryView<'_>,
     force: &mut [DVec3],
     torque: &mut [DVec3],
     obs: &mut O,
 ) {
+    let c = lanes_of(within, batch);
     let mut branch = V3::<F4>::default();
     let (mut dist, mut sum) = (F4::default(), F4::default());
     let (mut radius_i, mut radius_j) = (F4::default(), F4::default());
     let mut bridge = [false; LANES];
     for (l, bridged) in bridge.iter_mut().enumerate() {
-        let c = batch.get(l).unwrap_or(&batch[0]);
-        let (i, j) = (c.i as usize, c.j as usize);
-        branch.set_lane(l, c.branch);
-        dist.0[l] = c.dist;
+        let (i, j) = (c[l].i as usize, c[l].j as usize);
+        branch.set_lane(l, c[l].branch);
+        dist.0[l] = c[l].dist;
         // SAFETY: the pair was found in a list that fits the particles (checked by
         // `pair_forces`): `i` and `j` are slots, `local` a pair of the chunk's slices.
         unsafe {
             radius_i.0[l] = at(inp.radius, i);
             radius_j.0[l] = at(inp.radius, j);
             sum.0[l] = at(inp.radius, i) + at(inp.radius, j);
-            *bridged = at(history.bridge, c.local as usize);
+            *bridged = at(history.bridge, c[l].local as usize);
         }
     }
     let normal = branch.scale(F4::splat(1.0) / dist);
     let separation = -(sum - dist);
     let (f_a, alive) = kernel.apart_lanes::<F4, false>(separation, radius_i, radius_j, bridge);
     let rotation = kernel.resists_rotation();
-    for (l, c) in batch.iter().enumerate() {
+    for (l, c) in c.iter().enumerate().take(batch.len()) {
         let (i, j, local) = (c.i as usize, c.j as usize, c.local as usize);
         // The springs relax. Those of rotation stay zero under a law without them, so
         // their slots (a cache line each) are left untouched.
@@ -664,7 +716,8 @@ fn apart_batch<O: ContactObserver>(
 fn touch_batch<O: ContactObserver>(
     inp: &Inputs<'_>,
     kernel: &PairKernel,
-    batch: &[Touching],
+    within: &[Candidate],
+    batch: &[u32],
     active: &mut [bool],
     history: &mut HistoryView<'_>,
     force: &mut [DVec3],
@@ -675,8 +728,8 @@ fn touch_batch<O: ContactObserver>(
     let mut springs = Springs::<F4>::default();
     let (mut dist, mut sum, mut inv_mass) = (F4::default(), F4::default(), F4::default());
     let rotation = kernel.resists_rotation();
-    for l in 0..LANES {
-        let c = batch.get(l).unwrap_or(&batch[0]);
+    let c = lanes_of(within, batch);
+    for (l, c) in c.iter().enumerate() {
         let (i, j, local) = (c.i as usize, c.j as usize, c.local as usize);
         // SAFETY: the pair was found in a list that fits the particles (checked by
         // `pair_forces`): `i` and `j` are slots, `local` a pair of the chunk's slices.
@@ -708,7 +761,7 @@ fn touch_batch<O: ContactObserver>(
     pair.overlap = sum - dist;
     pair.reduced_mass = one / inv_mass;
     let f = kernel.touching_lanes::<F4, false>(&pair, &mut springs, inp.dt);
-    for (l, c) in batch.iter().enumerate() {
+    for (l, c) in c.iter().enumerate().take(batch.len()) {
         let (i, j, local) = (c.i as usize, c.j as usize, c.local as usize);
         // SAFETY: `local` is a pair of the chunk's slices (see above).
         unsafe { *at_mut(history.tangential, local) = springs.tangential.lane(l) };
@@ -758,6 +811,206 @@ fn touch_batch<O: ContactObserver>(
                 law: inp.laws.get(inp.species[i], inp.species[j]),
                 history: &history.get(local),
             });
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::bench::{BenchCohesion, bench_law};
+    use crate::contact::{Adhesion, ContactHistory, ContactLaw, Resistance};
+    use crate::domain::Domain;
+    use crate::particles::{Motion, Sphere};
+    use rand::{RngExt, SeedableRng};
+
+    /// The bench law with `adhesion`, and with rolling and torsion resistance when `rotation`.
+    fn law(adhesion: Adhesion, rotation: bool) -> ContactLaw {
+        let mut law = bench_law();
+        law.adhesion = adhesion;
+        if rotation {
+            let r = Resistance {
+                stiffness: 1000.0,
+                mu_static: 0.1,
+                mu_dynamic: 0.1,
+                ..law.tangential
+            };
+            (law.rolling, law.torsion) = (r, r);
+        }
+        law
+    }
+
+    /// 200 spheres of radius 0.4–0.6 and of species 0 or 1, dropped at random into a
+    /// periodic box of edge 6 (φ ≈ 0.5, so that many overlap and many are apart within a
+    /// bridge's range), moving and spinning at random.
+    fn random_spheres(rng: &mut rand_xoshiro::Xoshiro256PlusPlus) -> (Particles, Domain) {
+        let domain = Domain::new(DVec3::ZERO, DVec3::splat(6.0), [true; 3]);
+        let mut p = Particles::default();
+        let mut random_vector =
+            |scale: f64| DVec3::new(rng.random::<f64>(), rng.random(), rng.random()) * scale;
+        for k in 0..200 {
+            let s = Sphere {
+                position: random_vector(6.0),
+                velocity: random_vector(2.0) - 1.0,
+                angular_velocity: random_vector(4.0) - 2.0,
+                radius: 0.4 + 0.2 * random_vector(1.0).x,
+                species: (k % 2) as u16,
+                motion: Motion::Free,
+            };
+            p.push(s, 1.0);
+        }
+        (p, domain)
+    }
+
+    /// The forces, torques and list histories that the scalar law gives, pair by pair in
+    /// list order, for the list as it stands (which this advances as the loop would).
+    fn scalar_forces(
+        p: &Particles,
+        list: &mut NeighborList,
+        laws: &ContactTable,
+        domain: &Domain,
+        dt: f64,
+    ) -> (Vec<DVec3>, Vec<DVec3>) {
+        let images = domain.image_transforms();
+        let (mut force, mut torque) = (vec![DVec3::ZERO; p.len()], vec![DVec3::ZERO; p.len()]);
+        let mut s = list.slices();
+        for i in 0..p.len() {
+            for k in s.offsets[i] as usize..s.offsets[i + 1] as usize {
+                let (j, image) = (s.partner[k] as usize, &images[s.image[k] as usize]);
+                let branch = p.position[i] - image.position(p.position[j]);
+                let dist = branch.length();
+                let reach = p.radius[i] + p.radius[j] + laws.max_range();
+                if branch.length_squared() >= reach * reach {
+                    if s.active[k] {
+                        s.active[k] = false;
+                        s.history.clear(k);
+                    }
+                    continue;
+                }
+                let kin = PairKinematics {
+                    normal: branch * (1.0 / dist),
+                    overlap: p.radius[i] + p.radius[j] - dist,
+                    radius_i: p.radius[i],
+                    radius_j: p.radius[j],
+                    velocity: p.velocity[i] - image.velocity(p.velocity[j]),
+                    omega_i: p.angular_velocity[i],
+                    omega_j: image.angular_velocity(p.angular_velocity[j]),
+                    reduced_mass: 1.0 / (p.inv_mass[i] + p.inv_mass[j]),
+                };
+                let mut h: ContactHistory = s.history.get(k);
+                let pf = laws
+                    .get(p.species[i], p.species[j])
+                    .interact(&kin, &mut h, dt);
+                s.history.set(k, &h);
+                s.active[k] = pf.is_some();
+                if let Some(pf) = pf {
+                    force[i] += pf.force;
+                    force[j] -= pf.force;
+                    torque[i] += pf.torque_i;
+                    torque[j] += pf.torque_j;
+                }
+            }
+        }
+        (force, torque)
+    }
+
+    #[test]
+    fn the_pair_loop_gives_the_scalar_law_pair_by_pair() {
+        let willett = BenchCohesion::LiquidBridge.adhesion();
+        let reversible = BenchCohesion::Reversible.adhesion();
+        let linear = Adhesion::LinearIrreversible {
+            max_force: 185.0,
+            stiffness: 2000.0,
+        };
+        // A table where some pairs form bridges and others do not, with rotation springs
+        // on a third kind: the loop's per-pair paths (lanes of mixed kernels).
+        let mut mixed = ContactTable::uniform(2, law(willett, false));
+        mixed.set(0, 1, law(reversible, false));
+        mixed.set(1, 1, law(Adhesion::None, true));
+        let tables = [
+            (
+                "frictional",
+                ContactTable::uniform(1, law(Adhesion::None, false)),
+            ),
+            ("Willett", ContactTable::uniform(1, law(willett, true))),
+            (
+                "linear irreversible",
+                ContactTable::uniform(1, law(linear, false)),
+            ),
+            (
+                "reversible",
+                ContactTable::uniform(1, law(reversible, false)),
+            ),
+            ("mixed", mixed),
+        ];
+        let dt = 1e-4;
+        let images = Domain::new(DVec3::ZERO, DVec3::splat(6.0), [true; 3]).image_transforms();
+        for (name, laws) in &tables {
+            let species = |k: usize| (k % laws.species()) as u16;
+            for threads in [1, 2] {
+                let mut rng = rand_xoshiro::Xoshiro256PlusPlus::seed_from_u64(11);
+                let (mut p, domain) = random_spheres(&mut rng);
+                for k in 0..p.len() {
+                    p.species[k] = species(k);
+                }
+                let team = Team::new(threads);
+                let mut list = NeighborList::new(0.5, laws.max_range());
+                list.build(&mut p, &domain, &team).expect("list");
+                assert!(list.fits(p.len()));
+                let mut scratch = ForceScratch::default();
+                let (mut bridges_apart, mut lost) = (0, 0);
+                // Three evaluations, the particles moved at random in between (less than the
+                // skin): bridges form, some contacts open under them, some bridges break.
+                for round in 0..3 {
+                    let mut reference = list.clone();
+                    let (f_ref, t_ref) = scalar_forces(&p, &mut reference, laws, &domain, dt);
+                    let before: Vec<bool> = list.slices().active.to_vec();
+                    pair_forces::<()>(
+                        &mut p,
+                        &mut list,
+                        laws,
+                        &domain.image_transforms(),
+                        0.0,
+                        dt,
+                        &mut scratch,
+                        &team,
+                    );
+                    let scale = f_ref.iter().map(|f| f.length()).fold(0.0, f64::max);
+                    for k in 0..p.len() {
+                        let (df, dtq) = (p.force[k] - f_ref[k], p.torque[k] - t_ref[k]);
+                        assert!(
+                            df.length() <= 1e-12 * scale && dtq.length() <= 1e-12 * scale,
+                            "{name}, {threads} threads, round {round}, particle {k}: force {} \
+                             vs {}, torque {} vs {}",
+                            p.force[k],
+                            f_ref[k],
+                            p.torque[k],
+                            t_ref[k]
+                        );
+                    }
+                    let (got, want) = (list.slices(), reference.slices());
+                    for k in 0..got.active.len() {
+                        assert_eq!(
+                            (got.active[k], got.history.get(k)),
+                            (want.active[k], want.history.get(k)),
+                            "{name}, {threads} threads, round {round}, pair {k}"
+                        );
+                        let i = got.offsets.partition_point(|&o| o as usize <= k) - 1;
+                        let (j, image) = (got.partner[k] as usize, &images[got.image[k] as usize]);
+                        let apart = (p.position[i] - image.position(p.position[j])).length()
+                            > p.radius[i] + p.radius[j];
+                        bridges_apart += usize::from(got.history.get(k).bridge && apart);
+                        lost += usize::from(before[k] && !got.active[k]);
+                    }
+                    for r in &mut p.position {
+                        *r += (DVec3::new(rng.random(), rng.random(), rng.random()) - 0.5) * 0.2;
+                    }
+                }
+                assert!(lost > 0, "{name}: some pairs lose their force");
+                if laws.forms_bridges() {
+                    assert!(bridges_apart > 0, "{name}: some bridges hold pairs apart");
+                }
+            }
         }
     }
 }

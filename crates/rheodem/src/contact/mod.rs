@@ -266,6 +266,11 @@ impl ContactTable {
         self.laws.iter().map(ContactLaw::range).fold(0.0, f64::max)
     }
 
+    /// Whether any pair's law forms bridges at contact (irreversible adhesion).
+    pub fn forms_bridges(&self) -> bool {
+        self.kernels.iter().any(PairKernel::needs_bridge)
+    }
+
     /// Sets the law of the pair `(a, b)` (and `(b, a)`).
     pub fn set(&mut self, a: usize, b: usize, law: ContactLaw) {
         self.laws[a * self.species + b] = law;
