@@ -167,7 +167,9 @@ impl NeighborList {
 
     /// Whether the list's structure fits `n` particles: `n + 1` non-decreasing row offsets
     /// from zero to the pair count, one image code (below `IMAGE_COUNT`), activity flag and
-    /// history slot per pair, and every partner a slot below `n`. The force loop reads the
+    /// history slot per pair, and every partner a slot below `n` and above its row (a half
+    /// list: the force loop's chunks clear and sum the forces on that guarantee). The
+    /// force loop reads the
     /// particle arrays and the pair slots without bounds checks on this guarantee. The
     /// answer is remembered until the next build, so the scan runs once per build (or per
     /// list read from a checkpoint). A list that fits also learns the row of each pair.
@@ -184,7 +186,12 @@ impl NeighborList {
             && self.active.len() == pairs
             && self.history.len() == pairs
             && self.partner.iter().all(|&j| (j as usize) < n)
-            && self.image.iter().all(|&c| usize::from(c) < IMAGE_COUNT);
+            && self.image.iter().all(|&c| usize::from(c) < IMAGE_COUNT)
+            && self.offsets.windows(2).enumerate().all(|(i, row)| {
+                self.partner[row[0] as usize..row[1] as usize]
+                    .iter()
+                    .all(|&j| j as usize > i)
+            });
         if fits {
             self.first.clear();
             self.first.reserve(pairs);
@@ -911,8 +918,16 @@ mod tests {
         assert!(!list.fits(7) && !list.fits(9));
         // A partner that is no slot (as a damaged checkpoint could hold) is refused.
         list.fits_count = None;
+        let partner = list.partner[0];
         list.partner[0] = 8;
         assert!(!list.fits(8));
+        // Nor a partner that is not above its row (a half list holds each pair once, from
+        // its lower slot).
+        let row = list.offsets.partition_point(|&o| o == 0) - 1;
+        list.partner[0] = row as u32;
+        assert!(!list.fits(8));
+        list.partner[0] = partner;
+        assert!(list.fits(8));
         // A rebuild forgets the answer and finds a fitting list again.
         list.build(&mut p, &domain, &team).expect("list");
         assert_eq!(list.fits_count, None);
