@@ -247,7 +247,7 @@ fn chunk_forces<O: ContactObserver>(
             chunk_forces_avx2::<O>(inp, range, active, history, force, torque, found)
         };
     }
-    chunk_forces_generic::<O>(inp, range, active, history, force, torque, found)
+    chunk_forces_generic::<O, false>(inp, range, active, history, force, torque, found)
 }
 
 /// [`chunk_forces_generic`] compiled with AVX2.
@@ -262,11 +262,13 @@ fn chunk_forces_avx2<O: ContactObserver>(
     torque: &mut [DVec3],
     found: &mut Found,
 ) -> O {
-    chunk_forces_generic::<O>(inp, range, active, history, force, torque, found)
+    chunk_forces_generic::<O, true>(inp, range, active, history, force, torque, found)
 }
 
+/// With `AVX` (which the CPU must have) the law's lane groups are put together in
+/// registers.
 #[inline(always)]
-fn chunk_forces_generic<O: ContactObserver>(
+fn chunk_forces_generic<O: ContactObserver, const AVX: bool>(
     inp: &Inputs<'_>,
     range: std::ops::Range<usize>,
     active: &mut [bool],
@@ -344,16 +346,14 @@ fn chunk_forces_generic<O: ContactObserver>(
     // Pass 2: the contact law over each kind of pair, four at a time.
     let within = &within[..n];
     let same_kernel = |batch: &[u32]| {
-        uniform || {
-            let first = inp.kernel_of(&within[batch[0] as usize]);
-            batch
-                .iter()
-                .all(|&q| inp.kernel_of(&within[q as usize]) == first)
-        }
+        let first = inp.kernel_of(&within[batch[0] as usize]);
+        batch
+            .iter()
+            .all(|&q| inp.kernel_of(&within[q as usize]) == first)
     };
     for batch in touching[..n_touching].chunks(LANES) {
-        if same_kernel(batch) {
-            touch_batch::<O>(
+        if uniform || same_kernel(batch) {
+            touch_batch::<O, AVX>(
                 inp,
                 inp.kernel_of(&within[batch[0] as usize]),
                 within,
@@ -366,7 +366,7 @@ fn chunk_forces_generic<O: ContactObserver>(
             );
         } else {
             for q in batch {
-                touch_batch::<O>(
+                touch_batch::<O, AVX>(
                     inp,
                     inp.kernel_of(&within[*q as usize]),
                     within,
@@ -381,8 +381,8 @@ fn chunk_forces_generic<O: ContactObserver>(
         }
     }
     for batch in apart[..n_apart].chunks(LANES) {
-        if same_kernel(batch) {
-            apart_batch::<O>(
+        if uniform || same_kernel(batch) {
+            apart_batch::<O, AVX>(
                 inp,
                 inp.kernel_of(&within[batch[0] as usize]),
                 within,
@@ -395,7 +395,7 @@ fn chunk_forces_generic<O: ContactObserver>(
             );
         } else {
             for q in batch {
-                apart_batch::<O>(
+                apart_batch::<O, AVX>(
                     inp,
                     inp.kernel_of(&within[*q as usize]),
                     within,
@@ -632,7 +632,7 @@ unsafe fn add_pair(
 /// law (and its bridge) alone may act.
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
-fn apart_batch<O: ContactObserver>(
+fn apart_batch<O: ContactObserver, const AVX: bool>(
     inp: &Inputs<'_>,
     kernel: &PairKernel,
     within: &[Candidate],
@@ -644,25 +644,32 @@ fn apart_batch<O: ContactObserver>(
     obs: &mut O,
 ) {
     let c = lanes_of(within, batch);
-    let mut branch = V3::<F4>::default();
-    let (mut dist, mut sum) = (F4::default(), F4::default());
-    let (mut radius_i, mut radius_j) = (F4::default(), F4::default());
+    let (mut branch, mut dist) = ([DVec3::ZERO; LANES], [0.0; LANES]);
+    let (mut radius_i, mut radius_j) = ([0.0; LANES], [0.0; LANES]);
     let mut bridge = [false; LANES];
     for (l, bridged) in bridge.iter_mut().enumerate() {
         let (i, j) = (c[l].i as usize, c[l].j as usize);
-        branch.set_lane(l, c[l].branch);
-        dist.0[l] = c[l].dist;
+        branch[l] = c[l].branch;
+        dist[l] = c[l].dist;
         // SAFETY: the pair was found in a list that fits the particles (checked by
         // `pair_forces`): `i` and `j` are slots, `local` a pair of the chunk's slices.
         unsafe {
-            radius_i.0[l] = at(inp.radius, i);
-            radius_j.0[l] = at(inp.radius, j);
-            sum.0[l] = at(inp.radius, i) + at(inp.radius, j);
+            radius_i[l] = at(inp.radius, i);
+            radius_j[l] = at(inp.radius, j);
             *bridged = at(history.bridge, c[l].local as usize);
         }
     }
+    // SAFETY: with `AVX` the CPU has AVX (the caller's contract).
+    let (branch, dist, radius_i, radius_j) = unsafe {
+        (
+            V3::from_rows::<AVX>(branch),
+            F4::from_array::<AVX>(dist),
+            F4::from_array::<AVX>(radius_i),
+            F4::from_array::<AVX>(radius_j),
+        )
+    };
     let normal = branch.scale(F4::splat(1.0) / dist);
-    let separation = -(sum - dist);
+    let separation = -((radius_i + radius_j) - dist);
     let (f_a, alive) = kernel.apart_lanes::<F4, false>(separation, radius_i, radius_j, bridge);
     let rotation = kernel.resists_rotation();
     for (l, c) in c.iter().enumerate().take(batch.len()) {
@@ -710,10 +717,11 @@ fn apart_batch<O: ContactObserver>(
 }
 
 /// Up to [`LANES`] touching pairs with the same kernel, evaluated in one lane group (the
-/// lanes past `batch.len()` repeat the first pair and are discarded).
+/// lanes past `batch.len()` repeat the first pair and are discarded). With `AVX` (which
+/// the CPU must have) the lane groups are put together in registers.
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
-fn touch_batch<O: ContactObserver>(
+fn touch_batch<O: ContactObserver, const AVX: bool>(
     inp: &Inputs<'_>,
     kernel: &PairKernel,
     within: &[Candidate],
@@ -724,41 +732,70 @@ fn touch_batch<O: ContactObserver>(
     torque: &mut [DVec3],
     obs: &mut O,
 ) {
-    let mut pair = Touch::<F4>::default();
     let mut springs = Springs::<F4>::default();
-    let (mut dist, mut sum, mut inv_mass) = (F4::default(), F4::default(), F4::default());
     let rotation = kernel.resists_rotation();
     let c = lanes_of(within, batch);
+    // Lane by lane into rows, then into lane groups.
+    let (mut branch, mut velocity, mut omega_i, mut omega_j, mut tangential) = (
+        [DVec3::ZERO; LANES],
+        [DVec3::ZERO; LANES],
+        [DVec3::ZERO; LANES],
+        [DVec3::ZERO; LANES],
+        [DVec3::ZERO; LANES],
+    );
+    let (mut dist, mut radius_i, mut radius_j, mut inv_mass_i, mut inv_mass_j) = (
+        [0.0; LANES],
+        [0.0; LANES],
+        [0.0; LANES],
+        [0.0; LANES],
+        [0.0; LANES],
+    );
     for (l, c) in c.iter().enumerate() {
         let (i, j, local) = (c.i as usize, c.j as usize, c.local as usize);
         // SAFETY: the pair was found in a list that fits the particles (checked by
         // `pair_forces`): `i` and `j` are slots, `local` a pair of the chunk's slices.
         unsafe {
             let (v_j, w_j) = inp.partner_motion_unchecked(j, c.code);
-            pair.normal.set_lane(l, c.branch);
-            dist.0[l] = c.dist;
-            pair.radius_i.0[l] = at(inp.radius, i);
-            pair.radius_j.0[l] = at(inp.radius, j);
-            sum.0[l] = at(inp.radius, i) + at(inp.radius, j);
-            pair.velocity.set_lane(
-                l,
-                at(inp.velocity, i) - v_j - DVec3::new(inp.flow_rate * c.branch.y, 0.0, 0.0),
-            );
-            pair.omega_i.set_lane(l, at(inp.omega, i));
-            pair.omega_j.set_lane(l, w_j);
-            inv_mass.0[l] = at(inp.inv_mass, i) + at(inp.inv_mass, j);
-            springs
-                .tangential
-                .set_lane(l, at(history.tangential, local));
+            branch[l] = c.branch;
+            dist[l] = c.dist;
+            radius_i[l] = at(inp.radius, i);
+            radius_j[l] = at(inp.radius, j);
+            velocity[l] =
+                at(inp.velocity, i) - v_j - DVec3::new(inp.flow_rate * c.branch.y, 0.0, 0.0);
+            omega_i[l] = at(inp.omega, i);
+            omega_j[l] = w_j;
+            inv_mass_i[l] = at(inp.inv_mass, i);
+            inv_mass_j[l] = at(inp.inv_mass, j);
+            tangential[l] = at(history.tangential, local);
         }
         if rotation {
             springs.rolling.set_lane(l, history.rolling[local]);
             springs.torsion.set_lane(l, history.torsion[local]);
         }
     }
+    // SAFETY: with `AVX` the CPU has AVX (the caller's contract).
+    let mut pair = unsafe {
+        Touch {
+            normal: V3::from_rows::<AVX>(branch),
+            radius_i: F4::from_array::<AVX>(radius_i),
+            radius_j: F4::from_array::<AVX>(radius_j),
+            velocity: V3::from_rows::<AVX>(velocity),
+            omega_i: V3::from_rows::<AVX>(omega_i),
+            omega_j: V3::from_rows::<AVX>(omega_j),
+            ..Touch::default()
+        }
+    };
+    // SAFETY: as above.
+    let (dist, inv_mass) = unsafe {
+        springs.tangential = V3::from_rows::<AVX>(tangential);
+        (
+            F4::from_array::<AVX>(dist),
+            F4::from_array::<AVX>(inv_mass_i) + F4::from_array::<AVX>(inv_mass_j),
+        )
+    };
     let one = F4::splat(1.0);
     pair.normal = pair.normal.scale(one / dist);
-    pair.overlap = sum - dist;
+    pair.overlap = (pair.radius_i + pair.radius_j) - dist;
     pair.reduced_mass = one / inv_mass;
     let f = kernel.touching_lanes::<F4, false>(&pair, &mut springs, inp.dt);
     for (l, c) in c.iter().enumerate().take(batch.len()) {

@@ -266,7 +266,44 @@ impl V3<f64> {
     }
 }
 
+impl F4 {
+    /// The four numbers `a` as lanes. With `AVX` the lanes are put together in registers
+    /// (the same bits as lane by lane through memory, which makes the first use of the
+    /// group wait on four stores).
+    ///
+    /// # Safety
+    /// With `AVX`, the CPU supports AVX.
+    #[inline(always)]
+    pub unsafe fn from_array<const AVX: bool>(a: [f64; 4]) -> F4 {
+        #[cfg(target_arch = "x86_64")]
+        if AVX {
+            // SAFETY: the caller's contract.
+            return unsafe { avx::from_array(a) };
+        }
+        F4(a)
+    }
+}
+
 impl V3<F4> {
+    /// The four vectors `rows` as lanes, lane `l` from `rows[l]`. With `AVX` the rows are
+    /// transposed in registers (see [`F4::from_array`]).
+    ///
+    /// # Safety
+    /// With `AVX`, the CPU supports AVX.
+    #[inline(always)]
+    pub unsafe fn from_rows<const AVX: bool>(rows: [glam::DVec3; 4]) -> V3<F4> {
+        #[cfg(target_arch = "x86_64")]
+        if AVX {
+            // SAFETY: the caller's contract.
+            return unsafe { avx::from_rows(rows) };
+        }
+        let mut v = V3::<F4>::default();
+        for (l, r) in rows.into_iter().enumerate() {
+            v.set_lane(l, r);
+        }
+        v
+    }
+
     /// Lane `l` of each component.
     #[inline(always)]
     pub fn lane(&self, l: usize) -> glam::DVec3 {
@@ -282,9 +319,90 @@ impl V3<F4> {
     }
 }
 
+/// Lane groups put together in AVX registers.
+#[cfg(target_arch = "x86_64")]
+mod avx {
+    use super::{F4, V3};
+    use std::arch::x86_64::{
+        __m256d, _mm_set_sd, _mm_setr_pd, _mm256_castpd128_pd256, _mm256_insertf128_pd,
+        _mm256_permute2f128_pd, _mm256_setr_pd, _mm256_unpackhi_pd, _mm256_unpacklo_pd,
+    };
+
+    /// The lanes of a register.
+    #[inline(always)]
+    fn lanes(v: __m256d) -> F4 {
+        // SAFETY: both are four `f64`s, `F4` with `__m256d`'s alignment.
+        unsafe { std::mem::transmute::<__m256d, F4>(v) }
+    }
+
+    /// See [`F4::from_array`].
+    #[target_feature(enable = "avx")]
+    #[inline]
+    pub(super) fn from_array(a: [f64; 4]) -> F4 {
+        lanes(_mm256_setr_pd(a[0], a[1], a[2], a[3]))
+    }
+
+    /// See [`V3::from_rows`]: each row `(x, y, z, 0)`, then a 4×4 transpose of which the
+    /// fourth row is dropped.
+    #[target_feature(enable = "avx")]
+    #[inline]
+    pub(super) fn from_rows(rows: [glam::DVec3; 4]) -> V3<F4> {
+        let row = |v: glam::DVec3| {
+            _mm256_insertf128_pd::<1>(
+                _mm256_castpd128_pd256(_mm_setr_pd(v.x, v.y)),
+                _mm_set_sd(v.z),
+            )
+        };
+        let (r0, r1, r2, r3) = (row(rows[0]), row(rows[1]), row(rows[2]), row(rows[3]));
+        // (x0, x1, z0, z1), (y0, y1, 0, 0), (x2, x3, z2, z3), (y2, y3, 0, 0)
+        let (t0, t1) = (_mm256_unpacklo_pd(r0, r1), _mm256_unpackhi_pd(r0, r1));
+        let (t2, t3) = (_mm256_unpacklo_pd(r2, r3), _mm256_unpackhi_pd(r2, r3));
+        V3 {
+            x: lanes(_mm256_permute2f128_pd::<0x20>(t0, t2)),
+            y: lanes(_mm256_permute2f128_pd::<0x20>(t1, t3)),
+            z: lanes(_mm256_permute2f128_pd::<0x31>(t0, t2)),
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn lane_groups_put_together_in_registers_hold_the_rows() {
+        let rows = [
+            glam::DVec3::new(1.0, -2.0, 3.0),
+            glam::DVec3::new(-0.0, 5.5, f64::INFINITY),
+            glam::DVec3::new(7.0, f64::MIN_POSITIVE, -9.0),
+            glam::DVec3::new(1e300, 11.0, -1e-300),
+        ];
+        let numbers = [0.5, -0.0, 3.0e-7, -8.0];
+        // SAFETY: without AVX the lanes are set one by one; with it only where the CPU
+        // has it.
+        let plain = unsafe {
+            (
+                V3::from_rows::<false>(rows),
+                F4::from_array::<false>(numbers),
+            )
+        };
+        for (l, r) in rows.iter().enumerate() {
+            assert_eq!(plain.0.lane(l), *r);
+        }
+        assert_eq!(plain.1.0, numbers);
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx") {
+            // SAFETY: the CPU has AVX, checked just above.
+            let avx = unsafe { (V3::from_rows::<true>(rows), F4::from_array::<true>(numbers)) };
+            for l in 0..4 {
+                assert_eq!(
+                    avx.0.lane(l).to_array().map(f64::to_bits),
+                    rows[l].to_array().map(f64::to_bits)
+                );
+            }
+            assert_eq!(avx.1.0.map(f64::to_bits), numbers.map(f64::to_bits));
+        }
+    }
 
     #[test]
     fn four_lanes_give_the_bits_of_one() {
