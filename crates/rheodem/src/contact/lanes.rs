@@ -394,10 +394,10 @@ mod tests {
         if std::arch::is_x86_feature_detected!("avx") {
             // SAFETY: the CPU has AVX, checked just above.
             let avx = unsafe { (V3::from_rows::<true>(rows), F4::from_array::<true>(numbers)) };
-            for l in 0..4 {
+            for (l, r) in rows.iter().enumerate() {
                 assert_eq!(
                     avx.0.lane(l).to_array().map(f64::to_bits),
-                    rows[l].to_array().map(f64::to_bits)
+                    r.to_array().map(f64::to_bits)
                 );
             }
             assert_eq!(avx.1.0.map(f64::to_bits), numbers.map(f64::to_bits));
