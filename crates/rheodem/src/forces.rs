@@ -67,6 +67,8 @@ struct Inputs<'a> {
     max_range: f64,
     flow_rate: f64,
     dt: f64,
+    /// Whether to run the plain copy of the loop even where the CPU has AVX2.
+    plain: bool,
 }
 
 /// Zeroes the particle forces and torques and adds every pair force of the list, advancing
@@ -84,6 +86,25 @@ pub fn pair_forces<O: ContactObserver>(
     dt: f64,
     scratch: &mut ForceScratch,
     team: &Team,
+) -> O {
+    pair_forces_in::<O>(
+        particles, list, laws, images, flow_rate, dt, scratch, team, false,
+    )
+}
+
+/// [`pair_forces`], in the plain copy of the loop even where the CPU has AVX2 when
+/// `plain` (so that the tests compare the two copies on any machine).
+#[allow(clippy::too_many_arguments)]
+fn pair_forces_in<O: ContactObserver>(
+    particles: &mut Particles,
+    list: &mut NeighborList,
+    laws: &ContactTable,
+    images: &[ImageTransform; IMAGE_COUNT],
+    flow_rate: f64,
+    dt: f64,
+    scratch: &mut ForceScratch,
+    team: &Team,
+    plain: bool,
 ) -> O {
     let n = particles.len();
     // The loop reads the particle arrays and the pair slots without bounds checks: every
@@ -128,6 +149,7 @@ pub fn pair_forces<O: ContactObserver>(
         max_range: laws.max_range(),
         flow_rate,
         dt,
+        plain,
     };
 
     // Each chunk zeroes the part of its buffers it can write (the slots from its first
@@ -241,7 +263,7 @@ fn chunk_forces<O: ContactObserver>(
     found: &mut Found,
 ) -> O {
     #[cfg(target_arch = "x86_64")]
-    if std::arch::is_x86_feature_detected!("avx2") {
+    if !inp.plain && std::arch::is_x86_feature_detected!("avx2") {
         // SAFETY: the CPU supports AVX2, checked just above.
         return unsafe {
             chunk_forces_avx2::<O>(inp, range, active, history, force, torque, found)
@@ -1002,6 +1024,19 @@ mod tests {
                     let mut reference = list.clone();
                     let (f_ref, t_ref) = scalar_forces(&p, &mut reference, laws, &domain, dt);
                     let before: Vec<bool> = list.slices().active.to_vec();
+                    // The plain copy of the loop, on copies of the same state.
+                    let (mut p_plain, mut list_plain) = (p.clone(), list.clone());
+                    pair_forces_in::<()>(
+                        &mut p_plain,
+                        &mut list_plain,
+                        laws,
+                        &domain.image_transforms(),
+                        0.0,
+                        dt,
+                        &mut ForceScratch::default(),
+                        &team,
+                        true,
+                    );
                     pair_forces::<()>(
                         &mut p,
                         &mut list,
@@ -1023,6 +1058,29 @@ mod tests {
                             f_ref[k],
                             p.torque[k],
                             t_ref[k]
+                        );
+                    }
+                    // Both copies of the loop give the same bits.
+                    let bits = |v: &[DVec3]| -> Vec<[u64; 3]> {
+                        v.iter().map(|x| x.to_array().map(f64::to_bits)).collect()
+                    };
+                    assert_eq!(bits(&p.force), bits(&p_plain.force), "{name}: forces");
+                    assert_eq!(bits(&p.torque), bits(&p_plain.torque), "{name}: torques");
+                    let (got, plain) = (list.slices(), list_plain.slices());
+                    for k in 0..got.active.len() {
+                        let (a, b) = (got.history.get(k), plain.history.get(k));
+                        assert_eq!(
+                            (
+                                got.active[k],
+                                bits(&[a.tangential, a.rolling, a.torsion]),
+                                a.bridge
+                            ),
+                            (
+                                plain.active[k],
+                                bits(&[b.tangential, b.rolling, b.torsion]),
+                                b.bridge
+                            ),
+                            "{name}, {threads} threads, round {round}, pair {k}: plain copy"
                         );
                     }
                     let (got, want) = (list.slices(), reference.slices());
