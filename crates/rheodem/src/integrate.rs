@@ -52,8 +52,9 @@ pub fn drift(p: &mut Particles, dt: f64, team: &Team) {
         .collect();
     team.for_each(&mut pieces, |(((r, v), w), motion)| {
         let state = r.iter_mut().zip(v.iter_mut()).zip(w.iter_mut());
+        let mut turn = LastTurn::default();
         for (((r, v), w), motion) in state.zip(motion.iter()) {
-            drift_one(r, v, w, motion, dt);
+            drift_one(r, v, w, motion, dt, &mut turn);
         }
     });
 }
@@ -77,16 +78,51 @@ pub fn kick_drift(p: &mut Particles, h: f64, dt: f64, team: &Team) {
             // Zipped, so that no access is bounds-checked.
             let state = r.iter_mut().zip(v.iter_mut()).zip(w.iter_mut());
             let rates = f.iter().zip(t.iter()).zip(im.iter().zip(ii.iter()));
+            let mut turn = LastTurn::default();
             for (((r, v), w), (motion, ((f, t), (im, ii)))) in state.zip(motion.iter().zip(rates)) {
                 kick_one(v, w, *f, *t, *im, *ii, h);
-                drift_one(r, v, w, motion, dt);
+                // A particle with a mass is free (prescribed ones are infinitely heavy), so
+                // its motion record (64 bytes) need not be read.
+                if *im != 0.0 {
+                    debug_assert!(motion.is_free(), "a prescribed particle has a finite mass");
+                    *r += *v * dt;
+                } else {
+                    drift_one(r, v, w, motion, dt, &mut turn);
+                }
             }
         },
     );
 }
 
+/// The turn of a rigid rotation over one step, kept for the next particle: the wall
+/// particles of a part share one motion, and the quaternion costs a sine and a cosine.
+#[derive(Default)]
+struct LastTurn(Option<(DVec3, f64, DQuat)>);
+
+impl LastTurn {
+    /// The rotation by `angle` (rad) about the unit vector `axis`.
+    #[inline]
+    fn get(&mut self, axis: DVec3, angle: f64) -> DQuat {
+        match self.0 {
+            Some((a, t, q)) if a == axis && t == angle => q,
+            _ => {
+                let q = DQuat::from_axis_angle(axis, angle);
+                self.0 = Some((axis, angle, q));
+                q
+            }
+        }
+    }
+}
+
 #[inline(always)]
-fn drift_one(r: &mut DVec3, v: &mut DVec3, w: &mut DVec3, motion: &Motion, dt: f64) {
+fn drift_one(
+    r: &mut DVec3,
+    v: &mut DVec3,
+    w: &mut DVec3,
+    motion: &Motion,
+    dt: f64,
+    turn: &mut LastTurn,
+) {
     match *motion {
         Motion::Free => *r += *v * dt,
         Motion::Fixed => {
@@ -98,7 +134,7 @@ fn drift_one(r: &mut DVec3, v: &mut DVec3, w: &mut DVec3, motion: &Motion, dt: f
             axis,
             omega,
         } => {
-            let q = DQuat::from_axis_angle(axis, omega * dt);
+            let q = turn.get(axis, omega * dt);
             *r = center + q * (*r - center);
             *w = axis * omega;
             *v = w.cross(*r - center);
@@ -115,11 +151,12 @@ pub fn add_gravity(p: &mut Particles, g: DVec3, team: &Team) {
     let mut pieces: Vec<_> = p
         .force
         .chunks_mut(len)
-        .zip(p.mass.chunks(len).zip(p.motion.chunks(len)))
+        .zip(p.mass.chunks(len).zip(p.inv_mass.chunks(len)))
         .collect();
-    team.for_each(&mut pieces, |(f, (m, motion))| {
-        for ((f, m), motion) in f.iter_mut().zip(m.iter()).zip(motion.iter()) {
-            if motion.is_free() {
+    team.for_each(&mut pieces, |(f, (m, im))| {
+        for ((f, m), im) in f.iter_mut().zip(m.iter()).zip(im.iter()) {
+            // Free particles are those with a finite mass (see `kick_drift`).
+            if *im != 0.0 {
                 *f += g * *m;
             }
         }
@@ -130,6 +167,51 @@ pub fn add_gravity(p: &mut Particles, g: DVec3, team: &Team) {
 mod tests {
     use super::*;
     use crate::particles::Sphere;
+
+    #[test]
+    fn wall_particles_of_different_rotations_each_follow_their_own() {
+        // Neighbours in memory with the same motion share one quaternion per step; one of
+        // another speed or axis between them must not take it.
+        let motions = [
+            (DVec3::Z, 0.7),
+            (DVec3::Z, 0.7),
+            (DVec3::X, 0.7),
+            (DVec3::Z, -0.3),
+        ];
+        let mut p = Particles::default();
+        for (k, &(axis, omega)) in motions.iter().cycle().take(8).enumerate() {
+            let motion = Motion::Rotating {
+                center: DVec3::ZERO,
+                axis,
+                omega,
+            };
+            let position = DVec3::new(1.0 + k as f64, 0.5, 0.25);
+            p.push(
+                Sphere {
+                    position,
+                    velocity: DVec3::ZERO,
+                    angular_velocity: DVec3::ZERO,
+                    radius: 0.1,
+                    species: 0,
+                    motion,
+                },
+                1.0,
+            );
+        }
+        let start = p.position.clone();
+        let dt = 1e-3;
+        for _ in 0..500 {
+            kick_drift(&mut p, 0.5 * dt, dt, &Team::new(1));
+        }
+        for (k, &(axis, omega)) in motions.iter().cycle().take(8).enumerate() {
+            let expected = DQuat::from_axis_angle(axis, omega * 0.5) * start[k];
+            assert!(
+                (p.position[k] - expected).length() < 1e-12,
+                "particle {k}: {} against {expected}",
+                p.position[k]
+            );
+        }
+    }
 
     #[test]
     fn rotating_particle_follows_the_rigid_rotation() {

@@ -71,7 +71,8 @@ pub struct Particles {
     pub radius: Vec<f64>,
     /// Masses (kg); finite also for prescribed particles (used for output only).
     pub mass: Vec<f64>,
-    /// Inverse masses (1/kg); zero for prescribed particles, which count as infinitely heavy.
+    /// Inverse masses (1/kg); zero for prescribed particles, which count as infinitely heavy,
+    /// and only for them (the integrator tells free particles by it).
     pub inv_mass: Vec<f64>,
     /// Inverse moments of inertia (1/(kg m²)), `1 / (2/5 m a²)`; zero for prescribed particles.
     pub inv_inertia: Vec<f64>,
