@@ -64,7 +64,11 @@ struct Inputs<'a> {
     image: &'a [u8],
     images: &'a [ImageTransform; IMAGE_COUNT],
     laws: &'a ContactTable,
+    /// The largest interaction range beyond contact of any law (m).
     max_range: f64,
+    /// The largest range beyond contact of the laws that act on pairs apart without a
+    /// bridge (reversible adhesion; m).
+    free_range: f64,
     flow_rate: f64,
     dt: f64,
     /// Whether to run the plain copy of the loop even where the CPU has AVX2.
@@ -147,6 +151,7 @@ fn pair_forces_in<O: ContactObserver>(
         images,
         laws,
         max_range: laws.max_range(),
+        free_range: laws.free_range(),
         flow_rate,
         dt,
         plain,
@@ -308,9 +313,7 @@ fn chunk_forces_generic<O: ContactObserver, const AVX: bool>(
         apart,
     } = found;
     // Pass 1a: every pair within reach, compacted without a branch on the distance test
-    // (about half the list pairs touch, so that branch would be unpredictable), in one
-    // flat loop over the chunk's pairs (a loop per row would end at an unpredictable
-    // length). A pair that had a force and is now out of reach drops its history.
+    // (`Scan`). A pair that had a force and is now out of reach drops its history.
     let end = inp.offsets[range.end] as usize;
     let pairs = end - base;
     if within.len() < pairs {
@@ -319,21 +322,22 @@ fn chunk_forces_generic<O: ContactObserver, const AVX: bool>(
     if lost.len() < pairs {
         lost.resize(pairs, 0);
     }
-    let (mut n, mut n_lost) = (0, 0);
-    for k in base..end {
-        // SAFETY: `k` is a pair of the chunk, so `k - base < pairs`, the length of
-        // `active`; the list fits the particles (checked by `pair_forces`), so its row
-        // `first[k]` is a slot; `n` and `n_lost` are at most `k - base` (each counts some
-        // of the pairs before `k`), and `within` and `lost` hold at least `pairs`.
-        unsafe {
-            let local = k - base;
-            let (c, inside) = inp.candidate(at(inp.first, k) as usize, k, base);
-            *at_mut(within, n) = c;
-            n += usize::from(inside);
-            *at_mut(lost, n_lost) = local as u32;
-            n_lost += usize::from(at(active, local) & !inside);
-        }
-    }
+    // Under irreversible laws alone, a pair apart acts only through its bridge, so only
+    // bridged pairs are looked for beyond contact (most pairs apart within a bridge's
+    // range have never touched).
+    let scan = Scan {
+        base,
+        end,
+        active: &*active,
+        bridge: history.bridge,
+        within,
+        lost,
+    };
+    let (n, n_lost) = if inp.free_range < inp.max_range {
+        scan.run::<true>(inp)
+    } else {
+        scan.run::<false>(inp)
+    };
     for &local in &lost[..n_lost] {
         active[local as usize] = false;
         history.clear(local as usize);
@@ -437,6 +441,82 @@ fn chunk_forces_generic<O: ContactObserver, const AVX: bool>(
 /// Contacts per lane group of the law.
 const LANES: usize = 4;
 
+/// Pass 1a of [`chunk_forces`]: the arrays it reads and fills.
+struct Scan<'a> {
+    /// The chunk's first pair (index into the list).
+    base: usize,
+    /// One past the chunk's last pair.
+    end: usize,
+    /// Force flags of the chunk's pairs.
+    active: &'a [bool],
+    /// Bridge flags of the chunk's pairs.
+    bridge: &'a [bool],
+    /// Filled with the pairs within reach; holds at least as many as the chunk's pairs.
+    within: &'a mut [Candidate],
+    /// Filled with the pairs that had a force and are now out of reach (indices into the
+    /// chunk's pairs); holds at least as many as the chunk's pairs.
+    lost: &'a mut [u32],
+}
+
+impl Scan<'_> {
+    /// Writes every pair within reach into `within` and every pair that had a force and
+    /// is out of reach into `lost`, without a branch on the distance test (about half the
+    /// list pairs touch, so that branch would be unpredictable), in one flat loop over the
+    /// chunk's pairs (a loop per row would end at an unpredictable length). The reach is
+    /// the contact plus [`Inputs::max_range`], or, when `GATED`, plus
+    /// [`Inputs::free_range`] for a pair without a bridge. Returns the two counts.
+    #[inline(always)]
+    fn run<const GATED: bool>(self, inp: &Inputs<'_>) -> (usize, usize) {
+        let Scan {
+            base,
+            end,
+            active,
+            bridge,
+            within,
+            lost,
+        } = self;
+        let pairs = end - base;
+        assert!(active.len() >= pairs && bridge.len() >= pairs);
+        assert!(within.len() >= pairs && lost.len() >= pairs);
+        let (first, partner, image) = (
+            &inp.first[base..end],
+            &inp.partner[base..end],
+            &inp.image[base..end],
+        );
+        let (free, bridged) = (inp.free_range.to_bits(), inp.max_range.to_bits());
+        let (mut n, mut n_lost) = (0, 0);
+        for local in 0..pairs {
+            // SAFETY: `local < pairs`, at most the length of `active` and `bridge`
+            // (asserted above) and the length of the chunk's slices of the list; the list
+            // fits the particles (checked by `pair_forces`), so its rows and partners are
+            // slots; `n` and `n_lost` are at most `local` (each counts some of the pairs
+            // before it), and `within` and `lost` hold at least `pairs`.
+            unsafe {
+                let range = if GATED {
+                    // Chosen bit by bit, not by a branch: whether a pair is bridged is
+                    // unpredictable.
+                    let mask = 0u64.wrapping_sub(u64::from(at(bridge, local)));
+                    f64::from_bits(free ^ ((free ^ bridged) & mask))
+                } else {
+                    inp.max_range
+                };
+                let (c, inside) = inp.candidate(
+                    at(first, local) as usize,
+                    at(partner, local) as usize,
+                    at(image, local),
+                    local,
+                    range,
+                );
+                *at_mut(within, n) = c;
+                n += usize::from(inside);
+                *at_mut(lost, n_lost) = local as u32;
+                n_lost += usize::from(at(active, local) & !inside);
+            }
+        }
+        (n, n_lost)
+    }
+}
+
 /// Pass 1b of [`chunk_forces`]: the arrays it reads and fills.
 struct Split<'a> {
     /// Pairs within reach; their squared distance becomes the distance.
@@ -530,26 +610,30 @@ unsafe fn at_mut<T>(s: &mut [T], i: usize) -> &mut T {
 }
 
 impl Inputs<'_> {
-    /// List pair `k` (first partner `i`, `base` the chunk's first pair) with its branch
-    /// vector, and whether it lies within reach (the contact plus the laws' range).
+    /// The list pair of slots `i` and `j` (seen through image `code`), the chunk's pair
+    /// `local`, with its branch vector, and whether it lies within reach (the contact plus
+    /// `range`, m).
     ///
     /// # Safety
-    /// `k` is a pair of row `i` of a list that fits the particles ([`NeighborList::fits`]).
+    /// `i` and `j` are slots of the particle arrays.
     #[inline(always)]
-    unsafe fn candidate(&self, i: usize, k: usize, base: usize) -> (Candidate, bool) {
-        // SAFETY: `k` indexes the list's pairs and `i` is a slot (the caller's contract);
-        // a list that fits the particles has only slots as partners.
-        let (j, code, r_i, a_i) = unsafe {
-            let j = at(self.partner, k) as usize;
+    unsafe fn candidate(
+        &self,
+        i: usize,
+        j: usize,
+        code: u8,
+        local: usize,
+        range: f64,
+    ) -> (Candidate, bool) {
+        // SAFETY: `i` and `j` are slots (the caller's contract).
+        let (r_i, a_i, r_j, a_j) = unsafe {
             (
-                j,
-                at(self.image, k),
                 at(self.position, i),
                 at(self.radius, i),
+                at(self.position, j),
+                at(self.radius, j),
             )
         };
-        // SAFETY: as above.
-        let (r_j, a_j) = unsafe { (at(self.position, j), at(self.radius, j)) };
         let r_j = if code == IDENTITY_IMAGE {
             r_j
         } else {
@@ -557,9 +641,9 @@ impl Inputs<'_> {
         };
         let branch = r_i - r_j;
         let d2 = branch.length_squared();
-        let reach = a_i + a_j + self.max_range;
+        let reach = a_i + a_j + range;
         let c = Candidate {
-            local: (k - base) as u32,
+            local: local as u32,
             i: i as u32,
             j: j as u32,
             code,
@@ -755,7 +839,7 @@ fn touch_batch<O: ContactObserver, const AVX: bool>(
     obs: &mut O,
 ) {
     let mut springs = Springs::<F4>::default();
-    let rotation = kernel.resists_rotation();
+    let (rotation, bridges) = (kernel.resists_rotation(), kernel.needs_bridge());
     let c = lanes_of(within, batch);
     // Lane by lane into rows, then into lane groups.
     let (mut branch, mut velocity, mut omega_i, mut omega_j, mut tangential) = (
@@ -830,7 +914,7 @@ fn touch_batch<O: ContactObserver, const AVX: bool>(
         }
         // SAFETY: as above.
         unsafe {
-            if kernel.needs_bridge() {
+            if bridges {
                 *at_mut(history.bridge, local) = true;
             }
             *at_mut(active, local) = true;
@@ -973,6 +1057,74 @@ mod tests {
         (force, torque)
     }
 
+    /// Under irreversible laws the list leaves out pairs apart without a bridge beyond the
+    /// contact plus the skin; rebuilt again and again as bridges form, stretch and break,
+    /// it gives the forces of the list of every pair within the bridge's range plus the
+    /// skin (the same bits on one thread, where the pairs that act meet in the same order).
+    #[test]
+    fn a_list_without_idle_pairs_apart_gives_the_forces_of_the_full_list() {
+        let willett = BenchCohesion::LiquidBridge.adhesion();
+        let laws = ContactTable::uniform(1, law(willett, true));
+        assert_eq!(laws.free_range(), 0.0);
+        let (range, dt) = (laws.max_range(), 1e-4);
+        for threads in [1, 2] {
+            let team = Team::new(threads);
+            let mut rng = rand_xoshiro::Xoshiro256PlusPlus::seed_from_u64(5);
+            let (mut p0, domain) = random_spheres(&mut rng);
+            p0.species.fill(0);
+            let (mut p_short, mut p_full) = (p0.clone(), p0);
+            // A skin below the bridge's range, so that bridges act beyond it.
+            let (mut short, mut full) =
+                (NeighborList::new(0.1, range), NeighborList::new(0.1, range));
+            let mut scratch = ForceScratch::default();
+            let mut kept_beyond = 0;
+            for round in 0..8 {
+                short
+                    .build(&mut p_short, &domain, &team, 0.0)
+                    .expect("list");
+                full.build(&mut p_full, &domain, &team, range)
+                    .expect("list");
+                assert_eq!(p_short.position, p_full.position, "round {round}: slots");
+                assert!(short.len() < full.len(), "round {round}: pairs left out");
+                let (images, skin) = (domain.image_transforms(), short.skin);
+                let s = short.slices();
+                for i in 0..p_short.len() {
+                    for k in s.offsets[i] as usize..s.offsets[i + 1] as usize {
+                        let (j, image) = (s.partner[k] as usize, &images[s.image[k] as usize]);
+                        let d =
+                            (p_short.position[i] - image.position(p_short.position[j])).length();
+                        let gap = d - p_short.radius[i] - p_short.radius[j];
+                        assert!(gap <= skin || s.history.bridge[k], "an idle pair kept");
+                        kept_beyond += usize::from(gap > skin && gap < range);
+                    }
+                }
+                for (p, list) in [(&mut p_short, &mut short), (&mut p_full, &mut full)] {
+                    pair_forces::<()>(p, list, &laws, &images, 0.0, dt, &mut scratch, &team);
+                }
+                let scale = p_full.force.iter().map(|f| f.length()).fold(0.0, f64::max);
+                for k in 0..p_full.len() {
+                    let (a, b) = (p_short.force[k], p_full.force[k]);
+                    let (ta, tb) = (p_short.torque[k], p_full.torque[k]);
+                    if threads == 1 {
+                        assert_eq!((a, ta), (b, tb), "round {round}, particle {k}");
+                    } else {
+                        let close = (a - b).length() <= 1e-12 * scale
+                            && (ta - tb).length() <= 1e-12 * scale;
+                        assert!(close, "round {round}, particle {k}: {a} vs {b}");
+                    }
+                }
+                // Moves of up to 0.15 per axis: contacts open, bridges stretch past the
+                // contact plus the skin, some break.
+                for k in 0..p_full.len() {
+                    let step = (DVec3::new(rng.random(), rng.random(), rng.random()) - 0.5) * 0.3;
+                    p_short.position[k] += step;
+                    p_full.position[k] += step;
+                }
+            }
+            assert!(kept_beyond > 0, "some bridges hold pairs beyond the skin");
+        }
+    }
+
     #[test]
     fn the_pair_loop_gives_the_scalar_law_pair_by_pair() {
         let willett = BenchCohesion::LiquidBridge.adhesion();
@@ -1014,7 +1166,8 @@ mod tests {
                 }
                 let team = Team::new(threads);
                 let mut list = NeighborList::new(0.5, laws.max_range());
-                list.build(&mut p, &domain, &team).expect("list");
+                list.build(&mut p, &domain, &team, laws.free_range())
+                    .expect("list");
                 assert!(list.fits(p.len()));
                 let mut scratch = ForceScratch::default();
                 let (mut bridges_apart, mut lost) = (0, 0);

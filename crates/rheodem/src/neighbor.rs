@@ -95,6 +95,11 @@ fn two_largest(r: &[DVec3], r0: &[DVec3], moved: impl Fn(&DVec3, &DVec3) -> f64)
         .fold((0.0, 0.0), |a, b| top2(top2(a, b.0), b.1))
 }
 
+/// An infinite range (m).
+fn unbounded() -> f64 {
+    f64::INFINITY
+}
+
 /// Verlet list with contact history.
 #[derive(Clone, Debug, Default, Serialize, Deserialize)]
 pub struct NeighborList {
@@ -114,6 +119,11 @@ pub struct NeighborList {
     interaction_cutoff: f64,
     #[serde(skip)]
     last_rotations: Vec<(u32, DMat3)>,
+    /// The range beyond contact (m) within which the last build kept the pairs without a
+    /// bridge ([`NeighborList::build`]); infinite when it kept them all, and for a list
+    /// read back from a checkpoint (built for the laws stored with it).
+    #[serde(skip, default = "unbounded")]
+    unbridged_range: f64,
     /// Buffers of the history carried over the last rebuild, reused by the next.
     #[serde(skip)]
     carried: CarriedHistory,
@@ -217,10 +227,19 @@ impl NeighborList {
     }
 
     /// Whether the list must be rebuilt before the next force evaluation (the particles'
-    /// displacements are checked by the members of `team`).
-    pub fn needs_rebuild(&self, particles: &Particles, domain: &Domain, team: &Team) -> bool {
+    /// displacements are checked by the members of `team`), for laws that need the pairs
+    /// without a bridge within `unbridged_range` (m) beyond contact (see
+    /// [`NeighborList::build`]).
+    pub fn needs_rebuild(
+        &self,
+        particles: &Particles,
+        domain: &Domain,
+        team: &Team,
+        unbridged_range: f64,
+    ) -> bool {
         if self.reference_position.len() != particles.len()
             || domain.image_epoch() != self.reference_epoch
+            || unbridged_range > self.unbridged_range
         {
             return true;
         }
@@ -270,11 +289,18 @@ impl NeighborList {
     /// all pairs within cutoff and carries the contact history over by the particles and
     /// the pair's wedge image. Particles appended since the last build (insertion) start
     /// without history; every other pair keeps its springs and bridges.
+    ///
+    /// A pair without a bridge is kept only within `unbridged_range` (m) beyond contact,
+    /// plus the skin: under irreversible laws a pair apart acts only through a bridge,
+    /// which forms at contact, so a pair that has none cannot act before it has come
+    /// closer than the skin. Laws that act apart without a bridge (reversible adhesion)
+    /// need every pair: `unbridged_range` at least [`NeighborList::range`] (or infinite).
     pub fn build(
         &mut self,
         particles: &mut Particles,
         domain: &Domain,
         team: &Team,
+        unbridged_range: f64,
     ) -> Result<(), NeighborError> {
         self.fits_count = None;
         // Wrap first, remembering the wedge turns of every particle (by id) so that the
@@ -357,7 +383,16 @@ impl NeighborList {
         particles.permute(&order);
         let carried = self.carry_history(particles, domain, &images, &turns, &order);
 
-        self.find_pairs(particles, &grid, &start, domain, team);
+        self.unbridged_range = if unbridged_range < self.range {
+            unbridged_range
+        } else {
+            f64::INFINITY
+        };
+        let unbridged = self
+            .unbridged_range
+            .is_finite()
+            .then_some((unbridged_range, &carried));
+        self.find_pairs(particles, &grid, &start, domain, team, unbridged);
 
         // Every pair of the new list takes its carried history, or none; rows of blocks
         // of particles are written in parallel into their own stretch of the list.
@@ -476,6 +511,8 @@ impl NeighborList {
     /// concatenated in slot order (so the list does not depend on the thread count). Each
     /// particle searches the cells around itself (with the translations of the periodic
     /// axes) and, near a wedge face, around the rotated query position of each wedge image.
+    /// With `unbridged` (a range beyond contact, m, and the carried histories), a pair
+    /// farther than that range plus the skin is kept only if it carries a bridge.
     fn find_pairs(
         &mut self,
         particles: &Particles,
@@ -483,6 +520,7 @@ impl NeighborList {
         start: &[u32],
         domain: &Domain,
         team: &Team,
+        unbridged: Option<(f64, &CarriedHistory)>,
     ) {
         let n = particles.len();
         let pos = &particles.position;
@@ -558,6 +596,24 @@ impl NeighborList {
                         }
                     }
                 }
+            }
+            // Partners without a bridge beyond the unbridged reach cannot act before the
+            // next build (few pairs: those between the two reaches).
+            if let Some((range, carried)) = unbridged {
+                let reach = range + self.skin;
+                let mut kept = 0;
+                for e in 0..len {
+                    let (j, code) = row[e];
+                    let cut = a_i + rad[j as usize] + reach;
+                    let d = r_i - images[code as usize].position(pos[j as usize]);
+                    if d.length_squared() < cut * cut
+                        || carried.bridged(i as u32, j, domain.image_turns(code))
+                    {
+                        row[kept] = row[e];
+                        kept += 1;
+                    }
+                }
+                len = kept;
             }
             // Partners sorted by slot for a predictable memory walk.
             row[..len].sort_unstable();
@@ -695,6 +751,15 @@ impl CarriedHistory {
         self.key[*slot as usize] = (higher, turns);
         self.history[*slot as usize] = history;
         *slot += 1;
+    }
+
+    /// Whether the pair `(lower, higher)` through `turns` carries a bridge.
+    fn bridged(&self, lower: u32, higher: u32, turns: i32) -> bool {
+        let Some(row) = self.start.get(lower as usize..lower as usize + 2) else {
+            return false;
+        };
+        (row[0] as usize..row[1] as usize)
+            .any(|e| self.key[e] == (higher, turns) && self.history[e].bridge)
     }
 
     /// The history of the pair `(lower, higher)` through `turns`, if it was live.
@@ -903,8 +968,27 @@ mod tests {
         let (mut p, domain) = chain();
         let team = Team::new(1);
         let mut list = NeighborList::new(0.1, 0.0);
-        list.build(&mut p, &domain, &team).expect("list");
+        list.build(&mut p, &domain, &team, 0.0).expect("list");
         (p, domain, team, list)
+    }
+
+    /// A list built for laws that act apart only through bridges leaves out the pairs
+    /// apart without one beyond the skin (here the second neighbours along the chain,
+    /// 0.9 apart), and is stale for laws that need them.
+    #[test]
+    fn a_list_for_bridges_alone_is_stale_for_laws_acting_without_them() {
+        let (mut p, _) = chain();
+        // Wide enough across for the longer cutoff.
+        let domain = Domain::new(DVec3::ZERO, DVec3::new(7.6, 8.0, 8.0), [true; 3]);
+        let team = Team::new(1);
+        let mut list = NeighborList::new(0.1, 0.85);
+        list.build(&mut p, &domain, &team, 0.0).expect("list");
+        assert_eq!(list.len(), 8, "touching neighbours only");
+        assert!(!list.needs_rebuild(&p, &domain, &team, 0.0));
+        assert!(list.needs_rebuild(&p, &domain, &team, 0.5));
+        list.build(&mut p, &domain, &team, 0.85).expect("list");
+        assert_eq!(list.len(), 16, "second neighbours too");
+        assert!(!list.needs_rebuild(&p, &domain, &team, 0.85));
     }
 
     #[test]
@@ -929,7 +1013,7 @@ mod tests {
         list.partner[0] = partner;
         assert!(list.fits(8));
         // A rebuild forgets the answer and finds a fitting list again.
-        list.build(&mut p, &domain, &team).expect("list");
+        list.build(&mut p, &domain, &team, 0.0).expect("list");
         assert_eq!(list.fits_count, None);
         assert!(list.fits(8));
     }
@@ -977,7 +1061,7 @@ mod tests {
         let mut domain = Domain::new(DVec3::ZERO, DVec3::splat(8.0), [true; 3]);
         let team = Team::new(1);
         let mut list = NeighborList::new(0.1, 0.0);
-        list.build(&mut p, &domain, &team).expect("list");
+        list.build(&mut p, &domain, &team, 0.0).expect("list");
         domain.deformation = deformation;
         let affine = deformation - DMat3::IDENTITY;
         for (k, r) in p.position.iter_mut().enumerate() {
@@ -986,7 +1070,7 @@ mod tests {
                 r.z += 0.06;
             }
         }
-        list.needs_rebuild(&p, &domain, &team)
+        list.needs_rebuild(&p, &domain, &team, f64::INFINITY)
     }
 
     #[test]

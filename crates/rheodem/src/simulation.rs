@@ -203,19 +203,36 @@ impl Simulation {
     }
 
     /// Whether particles or images have moved far enough that the neighbour list must be
-    /// rebuilt before the next force evaluation.
+    /// rebuilt before the next force evaluation, or the laws need pairs it left out.
     pub fn list_is_stale(&mut self) -> bool {
+        // The laws act on pairs without a bridge up to their free range.
+        let unbridged_range = self.laws.free_range();
         let team = self.team.get();
         self.neighbors
-            .needs_rebuild(&self.particles, &self.domain, team)
+            .needs_rebuild(&self.particles, &self.domain, team, unbridged_range)
+    }
+
+    /// How far beyond contact (m) a build of the neighbour list keeps pairs without a
+    /// bridge: when the laws form bridges, only as far as the laws that act without one
+    /// (reversible adhesion) reach; otherwise every pair within the list's range, so that
+    /// the list serves any laws up to that range (the preparation compresses without
+    /// adhesion, then switches it on without a rebuild). A list that left out pairs the
+    /// laws need is rebuilt before the next step ([`Simulation::list_is_stale`]).
+    fn unbridged_range(&self) -> f64 {
+        if self.laws.forms_bridges() {
+            self.laws.free_range()
+        } else {
+            f64::INFINITY
+        }
     }
 
     /// Rebuilds the neighbour list now; walls rotate the history of particles that crossed
     /// a wedge face with them and renew their lists of particles within reach.
     pub fn rebuild_neighbors(&mut self) -> Result<(), NeighborError> {
+        let unbridged_range = self.unbridged_range();
         let team = self.team.get();
         self.neighbors
-            .build(&mut self.particles, &self.domain, team)?;
+            .build(&mut self.particles, &self.domain, team, unbridged_range)?;
         let reach = self.neighbors.range + self.neighbors.skin;
         for wall in &mut self.walls {
             for &(id, rotation) in self.neighbors.last_rotations() {

@@ -203,7 +203,7 @@ fn measured_pairs(
 ) -> ContactSums {
     let team = Team::new(rayon::current_num_threads());
     let mut list = NeighborList::new(0.2e-3, range);
-    list.build(particles, domain, &team).expect("list");
+    list.build(particles, domain, &team, range).expect("list");
     pair_forces::<ContactSums>(
         particles,
         &mut list,

@@ -266,6 +266,16 @@ impl ContactTable {
         self.laws.iter().map(ContactLaw::range).fold(0.0, f64::max)
     }
 
+    /// Largest range beyond contact (m) over the laws that act on pairs apart without a
+    /// bridge (reversible adhesion); zero when every adhesive law is irreversible.
+    pub fn free_range(&self) -> f64 {
+        self.kernels
+            .iter()
+            .filter(|k| !k.needs_bridge())
+            .map(PairKernel::range)
+            .fold(0.0, f64::max)
+    }
+
     /// Whether any pair's law forms bridges at contact (irreversible adhesion).
     pub fn forms_bridges(&self) -> bool {
         self.kernels.iter().any(PairKernel::needs_bridge)
