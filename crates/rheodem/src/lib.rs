@@ -51,6 +51,7 @@
 pub mod analysis;
 pub mod band;
 pub mod bench;
+mod cell_walk;
 pub mod cg;
 pub mod contact;
 pub mod domain;

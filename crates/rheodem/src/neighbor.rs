@@ -18,6 +18,7 @@
 //! steady shear this rebuilds far less often than lab-frame displacement, which counts the
 //! mean flow itself.
 
+use crate::cell_walk::{Candidates, Run};
 use crate::contact::{ContactHistory, HistorySlots, HistoryView};
 use crate::domain::{Domain, IDENTITY_IMAGE, IMAGE_COUNT, ImageTransform, image_code};
 use crate::integrate::PARTICLES_PER_TASK;
@@ -526,6 +527,7 @@ impl NeighborList {
         let pos = &particles.position;
         let rad = &particles.radius;
         let free: Vec<bool> = particles.motion.iter().map(|m| m.is_free()).collect();
+        let candidates = Candidates::new(pos, rad, &free, false);
         let reach = self.range + self.skin;
         let cutoff = grid.cutoff;
         let rotated = domain.rotated_images();
@@ -534,35 +536,11 @@ impl NeighborList {
         // The row of `i` in `row[..len]` (returned); `row` is a buffer that only grows, so
         // that its entries are not cleared for each particle.
         let row_of = |i: usize, row: &mut Vec<(u32, u8)>, stencil: &mut Stencil| -> usize {
-            let mut len = 0;
             let ci = grid.cell_coords(pos[i]);
             stencil.update(grid, start, ci, pos[i]);
-            let (r_i, a_i, free_i) = (pos[i], rad[i], free[i]);
-            for &(lo, hi, code) in stencil.ranges(grid, start, ci, r_i) {
-                // The domain's transform of this image (a translation here).
-                let shift = images[code as usize].shift;
-                let (lo, hi) = (lo.max(i as u32 + 1) as usize, hi as usize);
-                if lo >= hi {
-                    continue;
-                }
-                // Branch-free: every candidate is written, the length advances only for
-                // those within reach.
-                if row.len() < len + hi - lo {
-                    row.resize(len + hi - lo, (0, 0));
-                }
-                let found = &mut row[len..len + hi - lo];
-                let mut m = 0;
-                let cells = pos[lo..hi].iter().zip(&rad[lo..hi]).zip(&free[lo..hi]);
-                for (j, ((&r_j, &a_j), &free_j)) in (lo..hi).zip(cells) {
-                    let cut = a_i + a_j + reach;
-                    let d = r_i - (r_j + shift);
-                    found[m] = (j as u32, code);
-                    // `&` and `|`, not `&&` and `||`: a short circuit is a branch, taken
-                    // for the one candidate in six that is within reach, so mispredicted.
-                    m += usize::from((d.length_squared() < cut * cut) & (free_i | free_j));
-                }
-                len += m;
-            }
+            let (r_i, a_i) = (pos[i], rad[i]);
+            let runs = stencil.ranges(grid, start, ci, r_i);
+            let mut len = candidates.scan(i, reach, runs, &images, row, 0);
             // Wedge images: j seen at R r_j is within reach of r_i where R⁻¹ r_i is within
             // reach of r_j; only query positions within a cutoff of the wedge can find one.
             for &(code, inverse) in &rotated {
@@ -779,13 +757,13 @@ struct Stencil {
     /// The cell the ranges are for (`[-1; 3]` before the first).
     cell: [i64; 3],
     /// Slot ranges `lo..hi` and the image code they are seen through.
-    fixed: Vec<(u32, u32, u8)>,
+    fixed: Vec<Run>,
     /// Offsets of the cells across the periodic `y` faces, found per particle
     /// ([`CellGrid::neighbor`]): under Lees-Edwards shear their `x` depends on the
     /// particle's position.
     across_y: Vec<[i32; 3]>,
     /// `fixed` followed by the ranges across `y` of the current particle.
-    ranges: Vec<(u32, u32, u8)>,
+    ranges: Vec<Run>,
 }
 
 impl Default for Stencil {
@@ -801,7 +779,7 @@ impl Default for Stencil {
 
 /// Appends the slots of `cell` seen through `code` to `ranges`, extending the last range
 /// when the cell follows it in memory.
-fn push_cell(ranges: &mut Vec<(u32, u32, u8)>, start: &[u32], cell: usize, code: u8) {
+fn push_cell(ranges: &mut Vec<Run>, start: &[u32], cell: usize, code: u8) {
     let (lo, hi) = (start[cell], start[cell + 1]);
     match ranges.last_mut() {
         Some(last) if last.1 == lo && last.2 == code => last.1 = hi,
@@ -834,13 +812,7 @@ impl Stencil {
     }
 
     /// All the ranges of a particle at `r` in cell `c` (after [`Stencil::update`]).
-    fn ranges(
-        &mut self,
-        grid: &CellGrid,
-        start: &[u32],
-        c: [i64; 3],
-        r: DVec3,
-    ) -> &[(u32, u32, u8)] {
+    fn ranges(&mut self, grid: &CellGrid, start: &[u32], c: [i64; 3], r: DVec3) -> &[Run] {
         if self.across_y.is_empty() {
             return &self.fixed;
         }
