@@ -76,10 +76,14 @@ const BUILD_BLOCK: usize = 256;
 const TOP_LANES: usize = 8;
 
 /// The larger of `a.0` and `d`, and the larger of the rest: the two largest values seen,
-/// without a branch.
+/// without a branch. Written as comparisons rather than `f64::max` and `f64::min`, whose
+/// treatment of NaN costs several instructions each: these compile to one `maxsd` or
+/// `minsd`, and a NaN `d` is passed over all the same.
 #[inline(always)]
 fn top2((a0, a1): (f64, f64), d: f64) -> (f64, f64) {
-    (a0.max(d), a1.max(a0.min(d)))
+    let larger = if d > a0 { d } else { a0 };
+    let smaller = if d < a0 { d } else { a0 };
+    (larger, if smaller > a1 { smaller } else { a1 })
 }
 
 /// The two largest of `moved(r[k], r0[k])` over the particles `k` (squared displacements,
