@@ -875,7 +875,9 @@ impl CellGrid {
 
     fn cell_coords(&self, r: DVec3) -> [i64; 3] {
         std::array::from_fn(|a| {
-            let c = ((r[a] - self.lo[a]) / self.lengths[a] * self.dims[a] as f64).floor();
+            // Clamped at zero first, so that the cast's truncation is the floor (without
+            // a call to `floor`, which the baseline x86-64 target has no instruction for).
+            let c = (r[a] - self.lo[a]) / self.lengths[a] * self.dims[a] as f64;
             (c.max(0.0) as i64).min(self.dims[a] as i64 - 1)
         })
     }
