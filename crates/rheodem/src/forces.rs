@@ -342,8 +342,6 @@ fn chunk_forces_generic<O: ContactObserver, const AVX: bool>(
         active[local as usize] = false;
         history.clear(local as usize);
     }
-    // With one species, every pair has the same kernel.
-    let uniform = inp.laws.species() == 1;
     // Pass 1b: touching pairs, and pairs apart within an adhesive law's range, as
     // indices into `within`, again without a branch on the distance (under an adhesive
     // law about half the pairs within reach touch). A pair apart without a bridge under
@@ -352,6 +350,8 @@ fn chunk_forces_generic<O: ContactObserver, const AVX: bool>(
         touching.resize(n, 0);
         apart.resize(n, 0);
     }
+    // With one species, every pair has the same kernel.
+    let uniform = inp.laws.species() == 1;
     let split = Split {
         within: &mut within[..n],
         bridge: history.bridge,
@@ -362,7 +362,8 @@ fn chunk_forces_generic<O: ContactObserver, const AVX: bool>(
     };
     let (n_touching, n_apart, n_lost) = if inp.max_range == 0.0 {
         // No law acts beyond contact: every pair within reach touches (`d² < fl(s²)`
-        // gives `√d² ≤ s`), so they all go to the law, in order.
+        // gives `√d² ≤ s`, as the correctly rounded square root of a rounded square is
+        // the number itself), so they all go to the law, in order.
         for (q, c) in split.within.iter_mut().enumerate() {
             c.dist = c.dist.sqrt();
             split.touching[q] = q as u32;
@@ -386,17 +387,33 @@ fn chunk_forces_generic<O: ContactObserver, const AVX: bool>(
             .all(|&q| inp.kernel_of(&within[q as usize]) == first)
     };
     for batch in touching[..n_touching].chunks(LANES) {
-        touch_lanes::<O, AVX, false>(
-            inp,
-            uniform,
-            lanes_of(within, batch),
-            batch.len(),
-            active,
-            history,
-            force,
-            torque,
-            &mut obs,
-        );
+        if uniform || same_kernel(batch) {
+            touch_batch::<O, AVX>(
+                inp,
+                inp.kernel_of(&within[batch[0] as usize]),
+                within,
+                batch,
+                active,
+                history,
+                force,
+                torque,
+                &mut obs,
+            );
+        } else {
+            for q in batch {
+                touch_batch::<O, AVX>(
+                    inp,
+                    inp.kernel_of(&within[*q as usize]),
+                    within,
+                    std::slice::from_ref(q),
+                    active,
+                    history,
+                    force,
+                    torque,
+                    &mut obs,
+                );
+            }
+        }
     }
     for batch in apart[..n_apart].chunks(LANES) {
         if uniform || same_kernel(batch) {
@@ -428,42 +445,6 @@ fn chunk_forces_generic<O: ContactObserver, const AVX: bool>(
         }
     }
     obs
-}
-
-/// The touching pairs `c[..len]` (the lanes past `len` repeat the first), in one lane
-/// group when they share a kernel (always when `uniform`), else one at a time.
-/// `SQUARED`: their `dist` holds the squared distance.
-#[allow(clippy::too_many_arguments)]
-#[inline(always)]
-fn touch_lanes<O: ContactObserver, const AVX: bool, const SQUARED: bool>(
-    inp: &Inputs<'_>,
-    uniform: bool,
-    c: [&Candidate; LANES],
-    len: usize,
-    active: &mut [bool],
-    history: &mut HistoryView<'_>,
-    force: &mut [DVec3],
-    torque: &mut [DVec3],
-    obs: &mut O,
-) {
-    let kernel = inp.kernel_of(c[0]);
-    if uniform || c[..len].iter().all(|q| inp.kernel_of(q) == kernel) {
-        touch_batch::<O, AVX, SQUARED>(inp, kernel, c, len, active, history, force, torque, obs);
-    } else {
-        for q in &c[..len] {
-            touch_batch::<O, AVX, SQUARED>(
-                inp,
-                inp.kernel_of(q),
-                [*q; LANES],
-                1,
-                active,
-                history,
-                force,
-                torque,
-                obs,
-            );
-        }
-    }
 }
 
 /// Contacts per lane group of the law.
@@ -855,11 +836,11 @@ fn apart_batch<O: ContactObserver, const AVX: bool>(
 /// the CPU must have) the lane groups are put together in registers.
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
-fn touch_batch<O: ContactObserver, const AVX: bool, const SQUARED: bool>(
+fn touch_batch<O: ContactObserver, const AVX: bool>(
     inp: &Inputs<'_>,
     kernel: &PairKernel,
-    c: [&Candidate; LANES],
-    len: usize,
+    within: &[Candidate],
+    batch: &[u32],
     active: &mut [bool],
     history: &mut HistoryView<'_>,
     force: &mut [DVec3],
@@ -868,6 +849,7 @@ fn touch_batch<O: ContactObserver, const AVX: bool, const SQUARED: bool>(
 ) {
     let mut springs = Springs::<F4>::default();
     let (rotation, bridges) = (kernel.resists_rotation(), kernel.needs_bridge());
+    let c = lanes_of(within, batch);
     // Lane by lane into rows, then into lane groups.
     let (mut branch, mut velocity, mut omega_i, mut omega_j, mut tangential) = (
         [DVec3::ZERO; LANES],
@@ -921,9 +903,8 @@ fn touch_batch<O: ContactObserver, const AVX: bool, const SQUARED: bool>(
     // SAFETY: as above.
     let (dist, inv_mass) = unsafe {
         springs.tangential = V3::from_rows::<AVX>(tangential);
-        let dist = F4::from_array::<AVX>(dist);
         (
-            if SQUARED { dist.sqrt() } else { dist },
+            F4::from_array::<AVX>(dist),
             F4::from_array::<AVX>(inv_mass_i) + F4::from_array::<AVX>(inv_mass_j),
         )
     };
@@ -932,7 +913,7 @@ fn touch_batch<O: ContactObserver, const AVX: bool, const SQUARED: bool>(
     pair.overlap = (pair.radius_i + pair.radius_j) - dist;
     pair.reduced_mass = one / inv_mass;
     let f = kernel.touching_lanes::<F4, false>(&pair, &mut springs, inp.dt);
-    for (l, c) in c.iter().enumerate().take(len) {
+    for (l, c) in c.iter().enumerate().take(batch.len()) {
         let (i, j, local) = (c.i as usize, c.j as usize, c.local as usize);
         // SAFETY: `local` is a pair of the chunk's slices (see above).
         unsafe { *at_mut(history.tangential, local) = springs.tangential.lane(l) };
