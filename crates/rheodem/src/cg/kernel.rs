@@ -179,6 +179,7 @@ impl Kernel {
     /// The integral runs over the arc `|θ| < θ_c` where the kernel is non-zero, by
     /// Gauss-Legendre quadrature in `t = sin(θ/2)` (in `θ` when the arc exceeds about half
     /// the circle, near the axis).
+    #[inline(always)]
     pub fn ring(&self, r: f64, r_s: f64, dz: f64, angle: f64) -> [f64; 3] {
         let c = self.cutoff;
         let base = (r - r_s) * (r - r_s) + dz * dz;
@@ -227,7 +228,7 @@ impl Kernel {
 }
 
 /// `[Σ v, Σ v cos θ, Σ v cos 2θ]` over the nodes in order, from `v` and `cos θ`.
-#[inline]
+#[inline(always)]
 fn ring_sums(v: &[f64; RING_NODES], cos1: &[f64; RING_NODES]) -> [f64; 3] {
     let mut sums = [0.0; 3];
     for (v, cos1) in v.iter().zip(cos1) {

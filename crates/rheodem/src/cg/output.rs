@@ -3,6 +3,7 @@
 
 use super::fields::FieldPoint;
 use super::grid::Grid;
+use crate::io::text::append_lines;
 use std::fmt::Write;
 
 /// The scalar columns after the coordinates, with how to read each from a point.
@@ -50,16 +51,21 @@ pub fn to_csv(grid: &Grid, points: &[FieldPoint]) -> String {
     }
     let mut out = header.join(",");
     out.push('\n');
-    for p in points {
-        let mut row: Vec<String> = p.coordinates.iter().map(|x| format!("{x:e}")).collect();
-        row.extend(SCALARS.iter().map(|(_, f)| format!("{:e}", f(p))));
-        row.extend(p.velocity.iter().map(|x| format!("{x:e}")));
-        for (_, f) in TENSORS {
-            row.extend(f(p).iter().map(|x| format!("{x:e}")));
+    append_lines(&mut out, points, |row, p| {
+        let values = p
+            .coordinates
+            .iter()
+            .copied()
+            .chain(SCALARS.iter().map(|(_, f)| f(p)));
+        let values = values
+            .chain(p.velocity)
+            .chain(TENSORS.iter().flat_map(|(_, f)| *f(p)));
+        for (k, x) in values.enumerate() {
+            let sep = if k == 0 { "" } else { "," };
+            let _ = write!(row, "{sep}{x:e}");
         }
-        out.push_str(&row.join(","));
-        out.push('\n');
-    }
+        row.push('\n');
+    });
     out
 }
 
@@ -98,34 +104,41 @@ pub fn to_vti(grid: &Grid, points: &[FieldPoint]) -> String {
         s,
         "      <PointData Scalars=\"volume_fraction\" Vectors=\"velocity\">"
     );
-    let mut array = |name: &str, comps: usize, values: &mut dyn Iterator<Item = f64>| {
+    // A data array on one line, its values separated by spaces: `values` writes a point's
+    // components, each followed by a space, and the last space is dropped.
+    let mut array = |name: &str,
+                     comps: usize,
+                     values: &(dyn Fn(&mut String, &FieldPoint) + Sync)| {
         let _ = writeln!(
             s,
             "        <DataArray type=\"Float64\" Name=\"{name}\" NumberOfComponents=\"{comps}\" \
              format=\"ascii\">"
         );
-        let line: Vec<String> = values.map(|x| format!("{x:e}")).collect();
-        let _ = writeln!(s, "          {}", line.join(" "));
+        s.push_str("          ");
+        append_lines(&mut s, points, values);
+        if !points.is_empty() {
+            s.pop();
+        }
+        s.push('\n');
         let _ = writeln!(s, "        </DataArray>");
     };
     for (name, f) in SCALARS {
-        array(name, 1, &mut points.iter().map(f));
+        array(name, 1, &|s, p| spaced(s, &[f(p)]));
     }
-    array(
-        "velocity",
-        3,
-        &mut points.iter().flat_map(|p| p.velocity.into_iter()),
-    );
+    array("velocity", 3, &|s, p| spaced(s, &p.velocity));
     for (name, f) in TENSORS {
-        array(
-            name,
-            9,
-            &mut points.iter().flat_map(|p| f(p).iter().copied()),
-        );
+        array(name, 9, &|s, p| spaced(s, f(p)));
     }
     let _ = writeln!(s, "      </PointData>");
     let _ = writeln!(s, "    </Piece>");
     let _ = writeln!(s, "  </ImageData>");
     let _ = writeln!(s, "</VTKFile>");
     s
+}
+
+/// Writes each of `values` followed by a space.
+fn spaced(s: &mut String, values: &[f64]) {
+    for x in values {
+        let _ = write!(s, "{x:e} ");
+    }
 }

@@ -8,10 +8,12 @@
 
 use super::grid::Grid;
 use crate::domain::{Domain, IDENTITY_IMAGE, IMAGE_COUNT, ImageTransform, image_offsets};
+use crate::io::text::append_lines;
 use crate::observe::{ContactObserver, ContactView};
 use crate::particles::Particles;
 use glam::DVec3;
 use serde::{Deserialize, Serialize};
+use std::fmt::Write;
 
 /// One particle of a snapshot.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
@@ -311,45 +313,37 @@ const PARTICLE_COLUMNS_NO_SPIN: &str = "id,x,y,z,vx,vy,vz,radius,mass,free";
 pub const CONTACT_COLUMNS: &str = "i,j,wall,overlap,xi,yi,zi,bx,by,bz,cix,ciy,ciz,fix,fiy,fiz,\
                                    xj,yj,zj,cjx,cjy,cjz,fjx,fjy,fjz";
 
-fn push_vec(row: &mut Vec<String>, v: DVec3) {
-    row.extend(v.to_array().iter().map(|x| format!("{x:e}")));
+/// Appends `,x,y,z` with every component written so that it reads back exactly.
+fn push_vec(row: &mut String, v: DVec3) {
+    let _ = write!(row, ",{:e},{:e},{:e}", v.x, v.y, v.z);
 }
 
 /// The particle records as CSV, every number written so that it reads back exactly.
 pub fn particles_csv(records: &[ParticleRecord]) -> String {
     let mut out = format!("{PARTICLE_COLUMNS}\n");
-    for p in records {
-        let mut row = vec![p.id.to_string()];
-        push_vec(&mut row, p.position);
-        push_vec(&mut row, p.velocity);
-        row.push(format!("{:e}", p.radius));
-        row.push(format!("{:e}", p.mass));
-        row.push(u8::from(p.free).to_string());
-        push_vec(&mut row, p.angular_velocity);
-        out.push_str(&row.join(","));
-        out.push('\n');
-    }
+    append_lines(&mut out, records, |row, p| {
+        let _ = write!(row, "{}", p.id);
+        push_vec(row, p.position);
+        push_vec(row, p.velocity);
+        let _ = write!(row, ",{:e},{:e},{}", p.radius, p.mass, u8::from(p.free));
+        push_vec(row, p.angular_velocity);
+        row.push('\n');
+    });
     out
 }
 
 /// The contact records as CSV, every number written so that it reads back exactly.
 pub fn contacts_csv(records: &[ContactRecord]) -> String {
     let mut out = format!("{CONTACT_COLUMNS}\n");
-    for c in records {
-        let mut row = vec![
-            c.i.to_string(),
-            c.j.to_string(),
-            u8::from(c.wall).to_string(),
-            format!("{:e}", c.overlap),
-        ];
+    append_lines(&mut out, records, |row, c| {
+        let _ = write!(row, "{},{},{},{:e}", c.i, c.j, u8::from(c.wall), c.overlap);
         for v in [
             c.centre_i, c.branch, c.point_i, c.force_i, c.centre_j, c.point_j, c.force_j,
         ] {
-            push_vec(&mut row, v);
+            push_vec(row, v);
         }
-        out.push_str(&row.join(","));
-        out.push('\n');
-    }
+        row.push('\n');
+    });
     out
 }
 

@@ -187,33 +187,16 @@ impl CgSums {
     }
 
     /// Adds one snapshot: every body and contact segment, and their images, spread with
-    /// `kernel`. The work is split into as many fixed blocks as the thread pool has threads
-    /// and the blocks' sums are added in block order, so the result does not depend on
+    /// `kernel`. The work is split into as many fixed blocks as the thread pool has threads,
+    /// of about equal cost (a body counts one point, a segment its quadrature nodes), and
+    /// the blocks' sums are added in block order, so the result does not depend on
     /// scheduling (only on the thread count, through the order of additions).
     pub fn add_snapshot(&mut self, kernel: &Kernel, snap: &Snapshot) {
         let blocks = rayon::current_num_threads().max(1);
-        let work = snap.bodies.len() + snap.segments.len();
-        let per = work.div_ceil(blocks).max(1);
-        let grid = &self.grid;
-        let ax = grid.axes();
+        let bounds = block_bounds(kernel, snap, blocks);
         let partial: Vec<Vec<PointSums>> = (0..blocks)
             .into_par_iter()
-            .map(|b| {
-                let mut acc = vec![PointSums::default(); grid.len()];
-                for k in b * per..((b + 1) * per).min(work) {
-                    if k < snap.bodies.len() {
-                        for image in snap.body_images(k, grid, kernel.cutoff()) {
-                            add_body(grid, &ax, kernel, &image, &mut acc);
-                        }
-                    } else {
-                        let s = k - snap.bodies.len();
-                        for image in snap.segment_images(s, grid, kernel.cutoff()) {
-                            add_segment(grid, &ax, kernel, &image, &mut acc);
-                        }
-                    }
-                }
-                acc
-            })
+            .map(|b| spread_block(&self.grid, kernel, snap, bounds[b]..bounds[b + 1]))
             .collect();
         for acc in partial {
             for (a, b) in self.points.iter_mut().zip(&acc) {
@@ -224,7 +207,53 @@ impl CgSums {
     }
 }
 
+/// The first item of each of `blocks` consecutive blocks of a snapshot's items (bodies,
+/// then segments), and the item count last: blocks of about equal numbers of source points.
+fn block_bounds(kernel: &Kernel, snap: &Snapshot, blocks: usize) -> Vec<usize> {
+    let cost: Vec<usize> = std::iter::repeat_n(1, snap.bodies.len())
+        .chain(snap.segments.iter().map(|s| segment_nodes(kernel, s)))
+        .collect();
+    let total: usize = cost.iter().sum();
+    let mut bounds = Vec::with_capacity(blocks + 1);
+    bounds.push(0);
+    let mut done = 0;
+    for (k, c) in cost.iter().enumerate() {
+        // Block `b` ends at the first item whose cumulated cost reaches `b/blocks` of all.
+        while bounds.len() < blocks && done * blocks >= bounds.len() * total {
+            bounds.push(k);
+        }
+        done += c;
+    }
+    bounds.resize(blocks + 1, cost.len());
+    bounds
+}
+
+/// The sums of the items `items` of `snap` (bodies first, then segments) and their images.
+fn spread_block(
+    grid: &Grid,
+    kernel: &Kernel,
+    snap: &Snapshot,
+    items: std::ops::Range<usize>,
+) -> Vec<PointSums> {
+    let ax = grid.axes();
+    let mut acc = vec![PointSums::default(); grid.len()];
+    for k in items {
+        if k < snap.bodies.len() {
+            for image in snap.body_images(k, grid, kernel.cutoff()) {
+                add_body(grid, &ax, kernel, &image, &mut acc);
+            }
+        } else {
+            let s = k - snap.bodies.len();
+            for image in snap.segment_images(s, grid, kernel.cutoff()) {
+                add_segment(grid, &ax, kernel, &image, &mut acc);
+            }
+        }
+    }
+    acc
+}
+
 /// Visits every grid point within the kernel's reach of `p` with its weight.
+#[inline(always)]
 fn for_each_weight(
     grid: &Grid,
     ax: &Axes,
@@ -299,6 +328,7 @@ fn components(grid: &Grid, p: DVec3, v: DVec3) -> [f64; 3] {
     }
 }
 
+#[inline(always)]
 fn add_body(grid: &Grid, ax: &Axes, kernel: &Kernel, b: &Body, acc: &mut [PointSums]) {
     let v = components(grid, b.position, b.velocity);
     let mv = v.map(|x| x * b.mass);
@@ -325,16 +355,23 @@ fn add_into<const N: usize>(acc: &mut [f64; N], x: &[f64; N]) {
 
 /// Spreads `f ⊗ (to − from)` along the segment by Gauss-Legendre nodes in `s ∈ [0, 1]`,
 /// about two per kernel width (at least one, at most [`MAX_SEGMENT_NODES`]).
+#[inline(always)]
 fn add_segment(grid: &Grid, ax: &Axes, kernel: &Kernel, seg: &Segment, acc: &mut [PointSums]) {
     let l = seg.to - seg.from;
-    let n = ((2.0 * l.length() / kernel.width()).ceil() as usize).clamp(1, MAX_SEGMENT_NODES);
-    for &(s, ws) in segment_rule(n) {
+    for &(s, ws) in segment_rule(segment_nodes(kernel, seg)) {
         let p = seg.from + l * s;
         let t = outer(components(grid, p, seg.force), components(grid, p, l)).map(|x| x * ws);
         for_each_weight(grid, ax, kernel, p, |k, w| {
             add_into(&mut acc[k].contact, &w.tensor(t));
         });
     }
+}
+
+/// Nodes along a segment: about two per kernel width, at least one, at most
+/// [`MAX_SEGMENT_NODES`].
+fn segment_nodes(kernel: &Kernel, seg: &Segment) -> usize {
+    let l = (seg.to - seg.from).length();
+    ((2.0 * l / kernel.width()).ceil() as usize).clamp(1, MAX_SEGMENT_NODES)
 }
 
 /// Gauss-Legendre nodes and weights on `[0, 1]` for `n` nodes (1 ≤ n ≤ 8), computed once.
@@ -351,4 +388,103 @@ fn segment_rule(n: usize) -> &'static [(f64, f64)] {
             .collect()
     });
     &rules[n - 1]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::cg::KernelShape;
+
+    /// Bodies spread over a `(r, z)` ring cell, and contact segments of assorted lengths
+    /// (one to eight quadrature nodes).
+    fn snapshot() -> Snapshot {
+        let bodies = (0..40)
+            .map(|k| {
+                let f = f64::from(k);
+                Body {
+                    position: DVec3::new(3.0 + 0.05 * f, 0.1 * (f * 0.7).sin(), 1.0 + 0.02 * f),
+                    velocity: DVec3::new((f * 1.3).cos(), 1.0, 0.1 * f),
+                    mass: 1.0 + 0.01 * f,
+                    volume: 0.5,
+                    contacts: k % 5,
+                    bridges: k % 2,
+                }
+            })
+            .collect();
+        let segments = (0..60)
+            .map(|k| {
+                let f = f64::from(k);
+                let from = DVec3::new(3.2 + 0.03 * f, 0.05 * f.cos(), 1.2 + 0.01 * f);
+                Segment {
+                    from,
+                    to: from + DVec3::new(0.02 * f, 0.01, 0.005 * f),
+                    force: DVec3::new(1.0, -0.5 * f.sin(), 0.2),
+                }
+            })
+            .collect();
+        Snapshot {
+            time: 0.0,
+            bodies,
+            segments,
+            images: Vec::new(),
+        }
+    }
+
+    #[test]
+    fn blocks_cover_the_items_in_order_with_about_equal_cost() {
+        let kernel = Kernel::new(KernelShape::Lucy, 0.2).expect("valid");
+        let snap = snapshot();
+        let cost: Vec<usize> = std::iter::repeat_n(1, snap.bodies.len())
+            .chain(snap.segments.iter().map(|s| segment_nodes(&kernel, s)))
+            .collect();
+        assert!(cost.iter().any(|&c| c > 1), "segments of several nodes");
+        let total: usize = cost.iter().sum();
+        let heaviest = *cost.iter().max().expect("items");
+        for blocks in [1, 2, 3, 7, 200] {
+            let bounds = block_bounds(&kernel, &snap, blocks);
+            assert_eq!(bounds.len(), blocks + 1);
+            assert_eq!((bounds[0], bounds[blocks]), (0, cost.len()));
+            for b in 0..blocks {
+                assert!(bounds[b] <= bounds[b + 1], "{blocks} blocks: {bounds:?}");
+                let block: usize = cost[bounds[b]..bounds[b + 1]].iter().sum();
+                assert!(
+                    block * blocks <= total + heaviest * blocks,
+                    "{blocks} blocks: block {b} costs {block} of {total}"
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn the_sums_do_not_depend_on_the_block_split_beyond_rounding() {
+        let kernel = Kernel::new(KernelShape::Lucy, 0.2).expect("valid");
+        let grid = Grid::Axisymmetric {
+            r: [3.0, 5.0],
+            z: [0.8, 2.0],
+            bins: [12, 8],
+            angle: 0.5,
+        };
+        let snap = snapshot();
+        let sums_on = |threads: usize| {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .expect("a pool");
+            let mut sums = CgSums::new(grid.clone()).expect("valid");
+            pool.install(|| sums.add_snapshot(&kernel, &snap));
+            sums.points
+        };
+        let one = sums_on(1);
+        assert!(one.iter().any(|p| p.mass > 0.0 && p.contact[0] != 0.0));
+        for threads in [2, 3] {
+            for (a, b) in one.iter().zip(&sums_on(threads)) {
+                let close = |x: f64, y: f64| (x - y).abs() <= 1e-12 * (1.0 + x.abs());
+                assert!(close(a.mass, b.mass) && close(a.number, b.number));
+                for c in 0..9 {
+                    assert!(close(a.contact[c], b.contact[c]), "{threads} threads");
+                    assert!(close(a.kinetic[c], b.kinetic[c]), "{threads} threads");
+                }
+            }
+        }
+    }
 }

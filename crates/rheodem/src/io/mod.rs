@@ -1,8 +1,9 @@
 //! Input and output: packings, atomic file writes, directory locks, time series, VTK
-//! snapshots.
+//! snapshots, large tables formatted in parallel.
 
 pub mod atomic;
 pub mod lock;
 pub mod packing;
+pub mod text;
 pub mod timeseries;
 pub mod vtk;

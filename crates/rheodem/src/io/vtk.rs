@@ -1,6 +1,7 @@
 //! ParaView snapshots: VTK XML PolyData (`.vtp`) with one vertex per particle, and a `.pvd`
 //! collection that lists the snapshots with their times.
 
+use super::text::append_lines;
 use crate::particles::Particles;
 use std::fmt::Write;
 
@@ -19,10 +20,10 @@ pub fn particles_vtp(p: &Particles, extra: &[(&str, Vec<f64>)]) -> String {
          <PolyData>\n<Piece NumberOfPoints=\"{n}\" NumberOfVerts=\"{n}\">\n<Points>\n\
          <DataArray type=\"Float64\" NumberOfComponents=\"3\" format=\"ascii\">\n"
     );
-    for &i in &order {
+    append_lines(&mut s, &order, |s, &i| {
         let r = p.position[i];
         let _ = writeln!(s, "{:e} {:e} {:e}", r.x, r.y, r.z);
-    }
+    });
     s.push_str("</DataArray>\n</Points>\n<Verts>\n<DataArray type=\"Int64\" Name=\"connectivity\" format=\"ascii\">\n");
     for k in 0..n {
         let _ = write!(s, "{k} ");
@@ -32,80 +33,71 @@ pub fn particles_vtp(p: &Particles, extra: &[(&str, Vec<f64>)]) -> String {
         let _ = write!(s, "{k} ");
     }
     s.push_str("\n</DataArray>\n</Verts>\n<PointData Scalars=\"radius\" Vectors=\"velocity\">\n");
-    scalar(
-        &mut s,
-        "id",
-        "Int64",
-        order.iter().map(|&i| p.id[i].to_string()),
-    );
-    scalar(
-        &mut s,
-        "radius",
-        "Float64",
-        order.iter().map(|&i| format!("{:e}", p.radius[i])),
-    );
-    scalar(
-        &mut s,
-        "species",
-        "Int32",
-        order.iter().map(|&i| p.species[i].to_string()),
-    );
-    scalar(
-        &mut s,
-        "free",
-        "Int32",
-        order
-            .iter()
-            .map(|&i| u8::from(p.motion[i].is_free()).to_string()),
-    );
-    scalar(
-        &mut s,
-        "part",
-        "Int32",
-        order.iter().map(|&i| match p.part.get(i) {
-            Some(&part) if part != crate::observe::NO_PART => part.to_string(),
-            _ => "-1".to_string(),
-        }),
-    );
+    scalar(&mut s, "id", "Int64", &order, |s, i| {
+        let _ = write!(s, "{} ", p.id[i]);
+    });
+    scalar(&mut s, "radius", "Float64", &order, |s, i| {
+        let _ = write!(s, "{:e} ", p.radius[i]);
+    });
+    scalar(&mut s, "species", "Int32", &order, |s, i| {
+        let _ = write!(s, "{} ", p.species[i]);
+    });
+    scalar(&mut s, "free", "Int32", &order, |s, i| {
+        let _ = write!(s, "{} ", u8::from(p.motion[i].is_free()));
+    });
+    scalar(&mut s, "part", "Int32", &order, |s, i| {
+        match p.part.get(i) {
+            Some(&part) if part != crate::observe::NO_PART => {
+                let _ = write!(s, "{part} ");
+            }
+            _ => s.push_str("-1 "),
+        }
+    });
     for (name, values) in extra {
-        scalar(
-            &mut s,
-            name,
-            "Float64",
-            order.iter().map(|&i| format!("{:e}", values[i])),
-        );
+        scalar(&mut s, name, "Float64", &order, |s, i| {
+            let _ = write!(s, "{:e} ", values[i]);
+        });
     }
-    vector(&mut s, "velocity", order.iter().map(|&i| p.velocity[i]));
-    vector(
-        &mut s,
-        "angular_velocity",
-        order.iter().map(|&i| p.angular_velocity[i]),
-    );
-    vector(&mut s, "force", order.iter().map(|&i| p.force[i]));
+    vector(&mut s, "velocity", &order, |i| p.velocity[i]);
+    vector(&mut s, "angular_velocity", &order, |i| {
+        p.angular_velocity[i]
+    });
+    vector(&mut s, "force", &order, |i| p.force[i]);
     s.push_str("</PointData>\n</Piece>\n</PolyData>\n</VTKFile>\n");
     s
 }
 
-fn scalar(s: &mut String, name: &str, ty: &str, values: impl Iterator<Item = String>) {
+/// A one-component data array: `value` writes slot `i`'s entry and its trailing space.
+fn scalar(
+    s: &mut String,
+    name: &str,
+    ty: &str,
+    order: &[usize],
+    value: impl Fn(&mut String, usize) + Sync,
+) {
     let _ = writeln!(
         s,
         "<DataArray type=\"{ty}\" Name=\"{name}\" format=\"ascii\">"
     );
-    for v in values {
-        s.push_str(&v);
-        s.push(' ');
-    }
+    append_lines(s, order, |s, &i| value(s, i));
     s.push_str("\n</DataArray>\n");
 }
 
-fn vector(s: &mut String, name: &str, values: impl Iterator<Item = glam::DVec3>) {
+/// A three-component data array, one line per slot in `order`.
+fn vector(
+    s: &mut String,
+    name: &str,
+    order: &[usize],
+    value: impl Fn(usize) -> glam::DVec3 + Sync,
+) {
     let _ = writeln!(
         s,
         "<DataArray type=\"Float64\" Name=\"{name}\" NumberOfComponents=\"3\" format=\"ascii\">"
     );
-    for v in values {
+    append_lines(s, order, |s, &i| {
+        let v = value(i);
         let _ = writeln!(s, "{:e} {:e} {:e}", v.x, v.y, v.z);
-    }
+    });
     s.push_str("</DataArray>\n");
 }
 

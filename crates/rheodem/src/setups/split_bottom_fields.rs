@@ -16,6 +16,7 @@ use crate::io::atomic::write_atomic;
 use crate::plot::{HeatMap, Labels, Markers, Series, plot_svg};
 use crate::rheology::{MuLaw, PhiLaw};
 use crate::run::{RunError, io_err, read_checkpoint};
+use rayon::prelude::*;
 use std::path::{Path, PathBuf};
 
 /// How the cell's fields are coarse-grained (the `cg_*` keys of the spec).
@@ -602,7 +603,8 @@ pub fn write_maps(
     let failed = |name: &str, e: String| {
         RunError::Scenario(crate::scenario::invalid("figure", format!("{name}.svg"), e))
     };
-    for (name, title, value, read) in MAPS {
+    // The maps are drawn and written side by side on rayon's pool.
+    MAPS.par_iter().try_for_each(|(name, title, value, read)| {
         let values: Vec<f64> = points
             .iter()
             .map(|p| {
@@ -628,9 +630,8 @@ pub fn write_maps(
         write_atomic(&path, svg.as_bytes()).map_err(io_err("write", &path))?;
         let png = map.to_png().map_err(|e| failed(name, e))?;
         let path = dir.join(format!("{name}.png"));
-        write_atomic(&path, &png).map_err(io_err("write", &path))?;
-    }
-    Ok(())
+        write_atomic(&path, &png).map_err(io_err("write", &path))
+    })
 }
 
 #[cfg(test)]
