@@ -824,7 +824,7 @@ fn apart_batch<O: ContactObserver, const AVX: bool>(
                 branch: c.branch,
                 kinematics: &inp.kinematics(i, j, c.code, c.branch, c.dist),
                 force: &pf,
-                law: inp.laws.get(inp.species[i], inp.species[j]),
+                kernel,
                 history: &history.get(local),
             });
         }
@@ -960,7 +960,7 @@ fn touch_batch<O: ContactObserver, const AVX: bool>(
                 branch: c.branch,
                 kinematics: &kin,
                 force: &pf,
-                law: inp.laws.get(inp.species[i], inp.species[j]),
+                kernel,
                 history: &history.get(local),
             });
         }

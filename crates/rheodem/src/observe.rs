@@ -6,7 +6,7 @@
 //! chunk gets its own observer, and the chunks' observers are merged in chunk order, so a
 //! measurement is bit-identical for a given thread count. Observers compose as tuples.
 
-use crate::contact::{ContactHistory, ContactLaw, PairForce, PairKinematics};
+use crate::contact::{ContactHistory, PairForce, PairKernel, PairKinematics};
 use crate::domain::ImageTransform;
 use crate::measure::outer;
 use glam::{DMat3, DVec3};
@@ -35,8 +35,8 @@ pub struct ContactView<'a> {
     pub kinematics: &'a PairKinematics,
     /// The force and torques on `i` (and torque on `j`) of this step.
     pub force: &'a PairForce,
-    /// The pair's contact law.
-    pub law: &'a ContactLaw,
+    /// The pair's contact law, resolved.
+    pub kernel: &'a PairKernel,
     /// The pair's history after this step's update.
     pub history: &'a ContactHistory,
 }
@@ -65,7 +65,7 @@ impl ContactView<'_> {
     /// Elastic energy stored in the pair (J), springs and adhesive potential.
     pub fn elastic_energy(&self) -> f64 {
         let k = self.kinematics;
-        self.law
+        self.kernel
             .elastic_energy(k.overlap, k.radius_i, k.radius_j, self.history)
     }
 }

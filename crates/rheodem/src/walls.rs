@@ -235,7 +235,7 @@ impl Wall {
                     branch: normal * gap,
                     kinematics: &k,
                     force: &f,
-                    law: laws.get(particles.species[i], self.species),
+                    kernel,
                     history: h,
                 });
             }

@@ -156,6 +156,21 @@ impl PairKernel {
             .separated_force_lanes::<R, WALL>(s, radius_i, radius_j, bridge)
     }
 
+    /// Elastic energy (J) stored in a pair at overlap `δ` (m, either sign) with history `h`:
+    /// the springs' `½ k x²` while touching, plus the adhesive potential. See
+    /// [`ContactLaw::elastic_energy`].
+    pub fn elastic_energy(&self, overlap: f64, a_i: f64, a_j: f64, h: &ContactHistory) -> f64 {
+        let springs = if overlap > 0.0 {
+            0.5 * (self.stiffness * overlap * overlap
+                + self.tangential.stiffness * h.tangential.length_squared()
+                + self.rolling.stiffness * h.rolling.length_squared()
+                + self.torsion.stiffness * h.torsion.length_squared())
+        } else {
+            0.0
+        };
+        springs + self.adhesion.potential(overlap, a_i, a_j, h.bridge)
+    }
+
     /// Whether a bridge forms at contact (irreversible adhesive laws).
     #[inline(always)]
     pub fn needs_bridge(&self) -> bool {

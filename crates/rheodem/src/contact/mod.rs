@@ -196,15 +196,7 @@ impl ContactLaw {
     /// + ½ k_o |ξ_o|²` in contact, plus the adhesive potential of the law (negative; zero
     /// once the pair is free) for radii `a_i`, `a_j` (m).
     pub fn elastic_energy(&self, overlap: f64, a_i: f64, a_j: f64, h: &ContactHistory) -> f64 {
-        let springs = if overlap > 0.0 {
-            0.5 * (self.normal.stiffness * overlap * overlap
-                + self.tangential.stiffness * h.tangential.length_squared()
-                + self.rolling.stiffness * h.rolling.length_squared()
-                + self.torsion.stiffness * h.torsion.length_squared())
-        } else {
-            0.0
-        };
-        springs + self.adhesion.potential(overlap, a_i, a_j, h.bridge)
+        PairKernel::new(self).elastic_energy(overlap, a_i, a_j, h)
     }
 }
 
