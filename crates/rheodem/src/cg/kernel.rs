@@ -47,6 +47,8 @@ pub struct Kernel {
     shape: KernelShape,
     width: f64,
     cutoff: f64,
+    /// `1 / cutoff` (1/m): the Lucy kernel's `x = d/c` as a product, not a division.
+    inv_cutoff: f64,
     /// `ψ(0)` (1/m³).
     peak: f64,
     /// Nodes of the angular quadrature on `[0, 1]`.
@@ -81,6 +83,7 @@ impl Kernel {
             shape,
             width,
             cutoff,
+            inv_cutoff: 1.0 / cutoff,
             peak,
             ring_nodes: std::array::from_fn(|k| rule[k].0),
             ring_weights: std::array::from_fn(|k| rule[k].1),
@@ -112,7 +115,7 @@ impl Kernel {
         match self.shape {
             KernelShape::Gaussian => self.peak * (-0.5 * d2 / (self.width * self.width)).exp(),
             KernelShape::Lucy => {
-                let x = d2.sqrt() / c;
+                let x = d2.sqrt() * self.inv_cutoff;
                 let m = 1.0 - x;
                 self.peak * (1.0 + 3.0 * x) * m * m * m
             }
@@ -133,7 +136,7 @@ impl Kernel {
             }
             KernelShape::Lucy => {
                 for (psi, &d2) in psi.iter_mut().zip(&d2) {
-                    let x = d2.sqrt() / c;
+                    let x = d2.sqrt() * self.inv_cutoff;
                     let m = 1.0 - x;
                     let value = self.peak * (1.0 + 3.0 * x) * m * m * m;
                     *psi = if d2 >= c * c { 0.0 } else { value };
