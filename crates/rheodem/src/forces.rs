@@ -46,6 +46,22 @@ struct Found {
     /// Pairs apart within the interaction range (adhesive laws), as indices into `within`
     /// (the first entries of a step; never shrunk).
     apart: Vec<u32>,
+    /// The pairs the last prune kept (the first `n_kept` entries; never shrunk).
+    kept: Vec<Kept>,
+    /// How many pairs the last prune kept.
+    n_kept: usize,
+    /// The stamp of the last prune ([`crate::prune::PrunePlan`]) and the chunk it covered.
+    pruned: (u64, std::ops::Range<usize>),
+}
+
+/// A pair kept by a prune: its slots, its index in the chunk's pairs and the image code
+/// of `j`.
+#[derive(Clone, Copy, Debug, Default)]
+struct Kept {
+    i: u32,
+    j: u32,
+    local: u32,
+    code: u8,
 }
 
 /// Read-only particle data of the loop.
@@ -73,6 +89,8 @@ struct Inputs<'a> {
     dt: f64,
     /// Whether to run the plain copy of the loop even where the CPU has AVX2.
     plain: bool,
+    /// The prune's stamp and margin beyond reach (m; zero to scan the whole list).
+    prune: (u64, f64),
 }
 
 /// Zeroes the particle forces and torques and adds every pair force of the list, advancing
@@ -155,6 +173,7 @@ fn pair_forces_in<O: ContactObserver>(
         flow_rate,
         dt,
         plain,
+        prune: (slices.prune.stamp, slices.prune.margin),
     };
 
     // Each chunk zeroes the part of its buffers it can write (the slots from its first
@@ -311,9 +330,14 @@ fn chunk_forces_generic<O: ContactObserver, const AVX: bool>(
         lost,
         touching,
         apart,
+        kept,
+        n_kept,
+        pruned,
     } = found;
     // Pass 1a: every pair within reach, compacted without a branch on the distance test
-    // (`Scan`). A pair that had a force and is now out of reach drops its history.
+    // (`Scan`). A pair that had a force and is now out of reach drops its history. The
+    // scan covers the pairs kept by the list's prune when this chunk holds them, and
+    // otherwise the whole chunk, keeping the pairs for the prune (`crate::prune`).
     let end = inp.offsets[range.end] as usize;
     let pairs = end - base;
     if within.len() < pairs {
@@ -322,6 +346,22 @@ fn chunk_forces_generic<O: ContactObserver, const AVX: bool>(
     if lost.len() < pairs {
         lost.resize(pairs, 0);
     }
+    let (stamp, margin) = inp.prune;
+    let source = if margin == 0.0 {
+        Source::List
+    } else if pruned.0 == stamp && pruned.1 == range {
+        Source::Kept(&kept[..*n_kept])
+    } else {
+        if kept.len() < pairs {
+            kept.resize(pairs, Kept::default());
+        }
+        *pruned = (stamp, range.clone());
+        Source::Prune {
+            margin,
+            kept: &mut kept[..],
+            n_kept,
+        }
+    };
     // Under irreversible laws alone, a pair apart acts only through its bridge, so only
     // bridged pairs are looked for beyond contact (most pairs apart within a bridge's
     // range have never touched).
@@ -334,9 +374,9 @@ fn chunk_forces_generic<O: ContactObserver, const AVX: bool>(
         lost,
     };
     let (n, n_lost) = if inp.free_range < inp.max_range {
-        scan.run::<true>(inp)
+        scan.run::<true>(inp, source)
     } else {
-        scan.run::<false>(inp)
+        scan.run::<false>(inp, source)
     };
     for &local in &lost[..n_lost] {
         active[local as usize] = false;
@@ -467,15 +507,30 @@ struct Scan<'a> {
     lost: &'a mut [u32],
 }
 
+/// The pairs pass 1a scans.
+enum Source<'a> {
+    /// Every pair of the chunk.
+    List,
+    /// Every pair of the chunk, keeping those within `margin` (m) of their reach in
+    /// `kept` and their count in `n_kept`.
+    Prune {
+        margin: f64,
+        kept: &'a mut [Kept],
+        n_kept: &'a mut usize,
+    },
+    /// The pairs kept by the last prune.
+    Kept(&'a [Kept]),
+}
+
 impl Scan<'_> {
     /// Writes every pair within reach into `within` and every pair that had a force and
     /// is out of reach into `lost`, without a branch on the distance test (about half the
     /// list pairs touch, so that branch would be unpredictable), in one flat loop over the
-    /// chunk's pairs (a loop per row would end at an unpredictable length). The reach is
-    /// the contact plus [`Inputs::max_range`], or, when `GATED`, plus
+    /// pairs of `source` (a loop per row would end at an unpredictable length). The reach
+    /// is the contact plus [`Inputs::max_range`], or, when `GATED`, plus
     /// [`Inputs::free_range`] for a pair without a bridge. Returns the two counts.
     #[inline(always)]
-    fn run<const GATED: bool>(self, inp: &Inputs<'_>) -> (usize, usize) {
+    fn run<const GATED: bool>(self, inp: &Inputs<'_>, source: Source<'_>) -> (usize, usize) {
         let Scan {
             base,
             end,
@@ -492,37 +547,133 @@ impl Scan<'_> {
             &inp.partner[base..end],
             &inp.image[base..end],
         );
-        let (free, bridged) = (inp.free_range.to_bits(), inp.max_range.to_bits());
-        let (mut n, mut n_lost) = (0, 0);
-        for local in 0..pairs {
-            // SAFETY: `local < pairs`, at most the length of `active` and `bridge`
-            // (asserted above) and the length of the chunk's slices of the list; the list
-            // fits the particles (checked by `pair_forces`), so its rows and partners are
-            // slots; `n` and `n_lost` are at most `local` (each counts some of the pairs
-            // before it), and `within` and `lost` hold at least `pairs`.
-            unsafe {
-                let range = if GATED {
-                    // Chosen bit by bit, not by a branch: whether a pair is bridged is
-                    // unpredictable.
-                    let mask = 0u64.wrapping_sub(u64::from(at(bridge, local)));
-                    f64::from_bits(free ^ ((free ^ bridged) & mask))
-                } else {
-                    inp.max_range
-                };
-                let (c, inside) = inp.candidate(
-                    at(first, local) as usize,
-                    at(partner, local) as usize,
-                    at(image, local),
-                    local,
-                    range,
-                );
-                *at_mut(within, n) = c;
-                n += usize::from(inside);
-                *at_mut(lost, n_lost) = local as u32;
-                n_lost += usize::from(at(active, local) & !inside);
+        let mut sink = Sink {
+            active,
+            bridge,
+            within,
+            lost,
+            free: inp.free_range.to_bits(),
+            bridged: inp.max_range.to_bits(),
+            n: 0,
+            n_lost: 0,
+        };
+        match source {
+            Source::List => {
+                for local in 0..pairs {
+                    // SAFETY: `local < pairs`, the length of the chunk's slices, whose
+                    // rows and partners are slots (the list fits the particles, checked by
+                    // `pair_forces`).
+                    unsafe {
+                        sink.visit::<GATED>(
+                            inp,
+                            at(first, local) as usize,
+                            at(partner, local) as usize,
+                            at(image, local),
+                            local,
+                        );
+                    }
+                }
+            }
+            Source::Prune {
+                margin,
+                kept,
+                n_kept,
+            } => {
+                assert!(kept.len() >= pairs);
+                let mut k = 0;
+                for local in 0..pairs {
+                    // SAFETY: as above; `k` is at most `local`, below the length of `kept`
+                    // (asserted above).
+                    unsafe {
+                        let (i, j, code) = (at(first, local), at(partner, local), at(image, local));
+                        let (d2, reach) =
+                            sink.visit::<GATED>(inp, i as usize, j as usize, code, local);
+                        let outer = reach + margin;
+                        *at_mut(kept, k) = Kept {
+                            i,
+                            j,
+                            local: local as u32,
+                            code,
+                        };
+                        k += usize::from(d2 < outer * outer);
+                    }
+                }
+                *n_kept = k;
+            }
+            Source::Kept(kept) => {
+                for p in kept {
+                    // SAFETY: the prune kept pairs of this chunk's slices (its stamp and
+                    // range were checked by the caller), with their slots.
+                    unsafe {
+                        sink.visit::<GATED>(
+                            inp,
+                            p.i as usize,
+                            p.j as usize,
+                            p.code,
+                            p.local as usize,
+                        )
+                    };
+                }
             }
         }
-        (n, n_lost)
+        (sink.n, sink.n_lost)
+    }
+}
+
+/// Where pass 1a writes the pairs it visits.
+struct Sink<'a> {
+    /// Force flags of the chunk's pairs.
+    active: &'a [bool],
+    /// Bridge flags of the chunk's pairs.
+    bridge: &'a [bool],
+    /// Pairs within reach, the first `n` of them found.
+    within: &'a mut [Candidate],
+    /// Pairs that had a force and are now out of reach, the first `n_lost` of them found.
+    lost: &'a mut [u32],
+    /// The bits of [`Inputs::free_range`] and [`Inputs::max_range`].
+    free: u64,
+    bridged: u64,
+    n: usize,
+    n_lost: usize,
+}
+
+impl Sink<'_> {
+    /// The chunk's pair `local`, of slots `i` and `j` (seen through image `code`):
+    /// written into `within` and `lost`, each count advancing when it belongs there.
+    /// Returns its squared distance and its reach (m², m).
+    ///
+    /// # Safety
+    /// `i` and `j` are slots of the particle arrays and `local` a pair of the chunk, below
+    /// the lengths of `active` and `bridge`; fewer pairs have been visited than `within`
+    /// and `lost` hold.
+    #[inline(always)]
+    unsafe fn visit<const GATED: bool>(
+        &mut self,
+        inp: &Inputs<'_>,
+        i: usize,
+        j: usize,
+        code: u8,
+        local: usize,
+    ) -> (f64, f64) {
+        // SAFETY: the caller's contract; `n` and `n_lost` count some of the pairs visited
+        // before, fewer than `within` and `lost` hold.
+        unsafe {
+            let range = if GATED {
+                // Chosen bit by bit, not by a branch: whether a pair is bridged is
+                // unpredictable.
+                let mask = 0u64.wrapping_sub(u64::from(at(self.bridge, local)));
+                f64::from_bits(self.free ^ ((self.free ^ self.bridged) & mask))
+            } else {
+                inp.max_range
+            };
+            let (c, reach) = inp.candidate(i, j, code, local, range);
+            let (d2, inside) = (c.dist, c.dist < reach * reach);
+            *at_mut(self.within, self.n) = c;
+            self.n += usize::from(inside);
+            *at_mut(self.lost, self.n_lost) = local as u32;
+            self.n_lost += usize::from(at(self.active, local) & !inside);
+            (d2, reach)
+        }
     }
 }
 
@@ -620,8 +771,8 @@ unsafe fn at_mut<T>(s: &mut [T], i: usize) -> &mut T {
 
 impl Inputs<'_> {
     /// The list pair of slots `i` and `j` (seen through image `code`), the chunk's pair
-    /// `local`, with its branch vector, and whether it lies within reach (the contact plus
-    /// `range`, m).
+    /// `local`, with its branch vector and squared distance, and its reach (the contact
+    /// plus `range`, m).
     ///
     /// # Safety
     /// `i` and `j` are slots of the particle arrays.
@@ -633,7 +784,7 @@ impl Inputs<'_> {
         code: u8,
         local: usize,
         range: f64,
-    ) -> (Candidate, bool) {
+    ) -> (Candidate, f64) {
         // SAFETY: `i` and `j` are slots (the caller's contract).
         let (r_i, a_i, r_j, a_j) = unsafe {
             (
@@ -659,7 +810,7 @@ impl Inputs<'_> {
             branch,
             dist: d2,
         };
-        (c, d2 < reach * reach)
+        (c, reach)
     }
 
     /// The kernel of a pair.
@@ -1134,6 +1285,98 @@ mod tests {
         }
     }
 
+    /// Between checks the loop scans only the pairs the last prune kept; step after step,
+    /// as particles drift and pairs come within reach and leave it, that gives the bits of
+    /// a scan of the whole list (a clone of the list, which scans it whole), under laws
+    /// with and without range and with bridges, on one and on two threads.
+    #[test]
+    fn the_pairs_kept_by_a_prune_give_the_bits_of_the_whole_list() {
+        let tables = [
+            ("frictional", law(Adhesion::None, false)),
+            ("Willett", law(BenchCohesion::LiquidBridge.adhesion(), true)),
+            (
+                "reversible",
+                law(BenchCohesion::Reversible.adhesion(), false),
+            ),
+        ];
+        let dt = 1e-3;
+        for (name, law) in tables {
+            let laws = ContactTable::uniform(1, law);
+            for threads in [1, 2] {
+                let team = Team::new(threads);
+                let mut rng = rand_xoshiro::Xoshiro256PlusPlus::seed_from_u64(17);
+                let (mut p, domain) = random_spheres(&mut rng);
+                p.species.fill(0);
+                let images = domain.image_transforms();
+                let mut list = NeighborList::new(0.3, laws.max_range());
+                let mut scratch = ForceScratch::default();
+                let (mut kept_steps, mut prunes, mut builds, mut last_stamp) = (0, 0, 0, 0);
+                for step in 0..120 {
+                    if list.needs_rebuild(&p, &domain, &team, laws.free_range()) {
+                        list.build(&mut p, &domain, &team, laws.free_range())
+                            .expect("list");
+                        builds += 1;
+                    }
+                    let stamp = list.prune().stamp;
+                    if list.prune().is_active() {
+                        if stamp == last_stamp {
+                            kept_steps += 1;
+                        } else {
+                            prunes += 1;
+                        }
+                    }
+                    last_stamp = stamp;
+                    let (mut p_whole, mut whole) = (p.clone(), list.clone());
+                    assert!(!whole.prune().is_active(), "a clone scans the whole list");
+                    pair_forces::<()>(
+                        &mut p_whole,
+                        &mut whole,
+                        &laws,
+                        &images,
+                        0.0,
+                        dt,
+                        &mut ForceScratch::default(),
+                        &team,
+                    );
+                    pair_forces::<()>(
+                        &mut p,
+                        &mut list,
+                        &laws,
+                        &images,
+                        0.0,
+                        dt,
+                        &mut scratch,
+                        &team,
+                    );
+                    let bits = |v: &[DVec3]| -> Vec<[u64; 3]> {
+                        v.iter().map(|x| x.to_array().map(f64::to_bits)).collect()
+                    };
+                    let at = format!("{name}, {threads} threads, step {step}");
+                    assert_eq!(bits(&p.force), bits(&p_whole.force), "{at}: forces");
+                    assert_eq!(bits(&p.torque), bits(&p_whole.torque), "{at}: torques");
+                    let (got, want) = (list.slices(), whole.slices());
+                    assert_eq!(got.active, want.active, "{at}: force flags");
+                    for k in 0..got.active.len() {
+                        assert_eq!(got.history.get(k), want.history.get(k), "{at}, pair {k}");
+                    }
+                    // Drift with the spheres' own velocities (up to 0.002 per step and
+                    // axis): contacts open and close, and pairs left out by a prune come
+                    // within reach after a later one.
+                    for k in 0..p.len() {
+                        p.position[k] += p.velocity[k] * 0.002;
+                    }
+                }
+                let at = format!("{name}, {threads} threads");
+                assert!(
+                    kept_steps > 60,
+                    "{at}: {kept_steps} steps scanned the kept pairs"
+                );
+                assert!(prunes > 3, "{at}: {prunes} prunes");
+                assert!(builds > 1, "{at}: {builds} builds");
+            }
+        }
+    }
+
     #[test]
     fn the_pair_loop_gives_the_scalar_law_pair_by_pair() {
         let willett = BenchCohesion::LiquidBridge.adhesion();
@@ -1261,6 +1504,11 @@ mod tests {
                     }
                     for r in &mut p.position {
                         *r += (DVec3::new(rng.random(), rng.random(), rng.random()) - 0.5) * 0.2;
+                    }
+                    // The loop scans the pairs of the last prune until a check renews them.
+                    if list.needs_rebuild(&p, &domain, &team, laws.free_range()) {
+                        list.build(&mut p, &domain, &team, laws.free_range())
+                            .expect("list");
                     }
                 }
                 assert!(lost > 0, "{name}: some pairs lose their force");

@@ -8,21 +8,19 @@
 //! renamed through the sort's permutation and gathered into short rows by their new
 //! lower slot, which the new list then reads in order (no hashing, no search).
 //!
-//! A rebuild is due when two particles could have closed the skin since the last build.
-//! Displacements are measured relative to the box's affine motion since the build (the
-//! mean shear flow of Lees-Edwards boundaries, a compression or dilation): with `A` that
-//! affine map minus the identity, `d_i` the non-affine displacements and `r_c` the largest
-//! interaction cutoff, a pair outside the list (at least `r_c + skin` apart at the build)
-//! can have come within reach only once `(1 + ‖A‖)(d_1 + d_2) + ‖A‖ (r_c + skin) ≥ skin`,
-//! `d_1`, `d_2` the two largest `|d_i|`. Under
-//! steady shear this rebuilds far less often than lab-frame displacement, which counts the
-//! mean flow itself.
+//! A rebuild is due when two particles could have closed the skin since the last build,
+//! displacements measured relative to the box's affine motion ([`crate::displacement`]).
+//! Under steady shear this rebuilds far less often than lab-frame displacement, which
+//! counts the mean flow itself. Between rebuilds the force loop scans an inner list, the
+//! pairs within a smaller margin of reach, pruned every few steps ([`crate::prune`]).
 
 use crate::cell_walk::{Candidates, Run};
 use crate::contact::{ContactHistory, HistorySlots, HistoryView};
+use crate::displacement::{Moves, affine_norm, moves};
 use crate::domain::{Domain, IDENTITY_IMAGE, IMAGE_COUNT, ImageTransform, image_code};
 use crate::integrate::PARTICLES_PER_TASK;
 use crate::particles::{Motion, Particles};
+use crate::prune::PrunePlan;
 use crate::team::Team;
 use glam::{DMat3, DVec3};
 use serde::{Deserialize, Serialize};
@@ -72,34 +70,6 @@ pub fn min_wedge_angle(radius: f64, reach: f64) -> Option<f64> {
 /// Particles per block of the parallel neighbour build.
 const BUILD_BLOCK: usize = 256;
 
-/// Particles whose displacements the skin check compares side by side.
-const TOP_LANES: usize = 8;
-
-/// The larger of `a.0` and `d`, and the larger of the rest: the two largest values seen,
-/// without a branch. Written as comparisons rather than `f64::max` and `f64::min`, whose
-/// treatment of NaN costs several instructions each: these compile to one `maxsd` or
-/// `minsd`, and a NaN `d` is passed over all the same.
-#[inline(always)]
-fn top2((a0, a1): (f64, f64), d: f64) -> (f64, f64) {
-    let larger = if d > a0 { d } else { a0 };
-    let smaller = if d < a0 { d } else { a0 };
-    (larger, if smaller > a1 { smaller } else { a1 })
-}
-
-/// The two largest of `moved(r[k], r0[k])` over the particles `k` (squared displacements,
-/// m²), kept in [`TOP_LANES`] running pairs so that the maxima do not wait on each other.
-#[inline(always)]
-fn two_largest(r: &[DVec3], r0: &[DVec3], moved: impl Fn(&DVec3, &DVec3) -> f64) -> (f64, f64) {
-    let mut acc = [(0.0f64, 0.0f64); TOP_LANES];
-    for (r, r0) in r.chunks(TOP_LANES).zip(r0.chunks(TOP_LANES)) {
-        for ((a, r), r0) in acc.iter_mut().zip(r).zip(r0) {
-            *a = top2(*a, moved(r, r0));
-        }
-    }
-    acc.into_iter()
-        .fold((0.0, 0.0), |a, b| top2(top2(a, b.0), b.1))
-}
-
 /// An infinite range (m).
 fn unbounded() -> f64 {
     f64::INFINITY
@@ -142,6 +112,22 @@ pub struct NeighborList {
     /// the row offsets, so that the force loop walks the pairs in one flat loop.
     #[serde(skip)]
     first: Vec<u32>,
+    /// Which pairs the force loop scans ([`crate::prune`]).
+    #[serde(skip)]
+    prune: PrunePlan,
+    /// Positions at the last prune (m).
+    #[serde(skip)]
+    prune_position: Vec<DVec3>,
+    /// The box's deformation at the last prune.
+    #[serde(skip)]
+    prune_deformation: DMat3,
+    /// The box's lower corner at the last prune (m).
+    #[serde(skip)]
+    prune_lo: DVec3,
+    /// The two largest non-affine displacements since the build, summed, at the last
+    /// prune (m).
+    #[serde(skip)]
+    prune_build_sum: f64,
 }
 
 /// Read-only and mutable views of the list used by the force loop.
@@ -158,6 +144,8 @@ pub struct PairSlices<'a> {
     pub active: &'a mut [bool],
     /// Contact history of each pair.
     pub history: HistoryView<'a>,
+    /// Which pairs the force loop scans.
+    pub prune: &'a PrunePlan,
 }
 
 impl NeighborList {
@@ -228,15 +216,19 @@ impl NeighborList {
             image: &self.image,
             active: &mut self.active,
             history: self.history.view(),
+            prune: &self.prune,
         }
     }
 
     /// Whether the list must be rebuilt before the next force evaluation (the particles'
     /// displacements are checked by the members of `team`), for laws that need the pairs
     /// without a bridge within `unbridged_range` (m) beyond contact (see
-    /// [`NeighborList::build`]).
+    /// [`NeighborList::build`]). Call it whenever the particles have moved, before the
+    /// forces: it also plans which pairs the force loop scans ([`crate::prune`]). While the
+    /// pairs kept by the last prune still hold every pair within reach, only their margin
+    /// is checked; otherwise the skin, and a list that keeps its skin prunes again.
     pub fn needs_rebuild(
-        &self,
+        &mut self,
         particles: &Particles,
         domain: &Domain,
         team: &Team,
@@ -248,46 +240,86 @@ impl NeighborList {
         {
             return true;
         }
-        let affine = domain.deformation * self.reference_deformation.inverse() - DMat3::IDENTITY;
-        let norm = (affine.x_axis.length_squared()
-            + affine.y_axis.length_squared()
-            + affine.z_axis.length_squared())
-        .sqrt();
-        // The two largest non-affine displacements (squared); max is order-independent, so
-        // the parallel reduction is deterministic.
-        let lo = self.reference_lo;
-        let moved = |r: &DVec3, r0: &DVec3| (*r - *r0 - affine * (*r0 - lo)).length_squared();
-        // Without deformation since the build the affine part is exactly zero: the same
-        // displacements without the matrix product. Under simple shear along x with the
-        // gradient along y, and a height that follows the stress, only the matrix's y
-        // column moves: the product is that column times `r₀.y − lo.y` (the other columns'
-        // terms are zeros, which change no square).
-        let rigid = affine == DMat3::ZERO;
-        let y_only = affine.x_axis == DVec3::ZERO && affine.z_axis == DVec3::ZERO;
-        let column = affine.y_axis;
-        let len = team.piece_len(particles.len(), PARTICLES_PER_TASK);
-        let mut pieces: Vec<_> = particles
-            .position
-            .chunks(len)
-            .zip(self.reference_position.chunks(len))
-            .map(|(r, r0)| (r, r0, (0.0f64, 0.0f64)))
-            .collect();
-        team.for_each(&mut pieces, |(r, r0, top)| {
-            *top = if rigid {
-                two_largest(r, r0, |r, r0| (*r - *r0).length_squared())
-            } else if y_only {
-                two_largest(r, r0, |r, r0| {
-                    (*r - *r0 - column * (r0.y - lo.y)).length_squared()
-                })
-            } else {
-                two_largest(r, r0, moved)
-            };
-        });
-        let (first, second) = pieces
-            .iter()
-            .fold((0.0, 0.0), |a, p| top2(top2(a, p.2.0), p.2.1));
-        (1.0 + norm) * (first.sqrt() + second.sqrt()) + norm * (self.interaction_cutoff + self.skin)
-            >= self.skin
+        // While a prune holds, the displacements since it are checked, and they bound
+        // those since the build (`NeighborList::bound_since_build`), so that the build's
+        // need not be checked as well (one pass over the particles rather than two). The
+        // list is rebuilt at the same steps as without the inner list: whenever the bound
+        // does not settle that, the displacements since the build are checked exactly.
+        let mut holds = false;
+        if self.prune.is_active() && self.prune_position.len() == particles.len() {
+            let margin = self.prune.margin;
+            let since_prune = moves(
+                particles,
+                domain,
+                team,
+                (&self.prune_position, self.prune_deformation, self.prune_lo),
+            );
+            // A pair left out by the prune was at least `margin` beyond reach then, up to
+            // the rounding of the prune's distance test (relative 1e-15), which the factor
+            // below covers many times over.
+            holds = since_prune.closing(self.interaction_cutoff + margin) < margin * (1.0 - 1e-9);
+            if holds && self.bound_since_build(domain, since_prune) < self.skin {
+                return false;
+            }
+        }
+        let since_build = moves(
+            particles,
+            domain,
+            team,
+            (
+                &self.reference_position,
+                self.reference_deformation,
+                self.reference_lo,
+            ),
+        );
+        let closed = since_build.closing(self.interaction_cutoff + self.skin);
+        if closed >= self.skin {
+            return true;
+        }
+        if !holds {
+            self.prune_at(particles, domain, self.skin - closed, since_build.sum);
+        }
+        false
+    }
+
+    /// An upper bound on how far the skin may have closed since the build, from the
+    /// particles' moves since the last prune and the two largest non-affine displacements
+    /// `p₁ + p₂` since the build then, with a margin for rounding (relative 1e-9).
+    ///
+    /// With `u_i` the non-affine displacement since the build (`A` the affine map minus
+    /// the identity since then), `v_i` that since the prune (`B` likewise) and `lo_b`,
+    /// `lo_p` the lower corners at the two: `A(t) − A(t_p) = B(t) (I + A(t_p))`, whence
+    /// `u_i(t) = u_i(t_p) + v_i(t) + B(t) (u_i(t_p) + lo_b − lo_p)` and
+    /// `d₁ + d₂ ≤ (1 + ‖B‖)(p₁ + p₂) + (v₁ + v₂) + 2 ‖B‖ |lo_b − lo_p|`.
+    fn bound_since_build(&self, domain: &Domain, since_prune: Moves) -> f64 {
+        let b = since_prune.norm;
+        let shift = (self.reference_lo - self.prune_lo).length();
+        let sum = (1.0 + b) * self.prune_build_sum + since_prune.sum + 2.0 * b * shift;
+        let reach = self.interaction_cutoff + self.skin;
+        let since_build = Moves {
+            norm: affine_norm(domain, self.reference_deformation),
+            sum,
+        };
+        since_build.closing(reach) * (1.0 + 1e-9) + 1e-12 * reach
+    }
+
+    /// Plans a prune at the particles' current positions, keeping the pairs within `left`
+    /// (m, what is left of the skin) of reach, or no prune if that is too little;
+    /// `build_sum` (m) is the sum of the two largest non-affine displacements since the
+    /// build.
+    fn prune_at(&mut self, particles: &Particles, domain: &Domain, left: f64, build_sum: f64) {
+        self.prune = PrunePlan::within(left, self.skin);
+        if self.prune.is_active() {
+            self.prune_position.clone_from(&particles.position);
+            self.prune_deformation = domain.deformation;
+            self.prune_lo = domain.lo;
+            self.prune_build_sum = build_sum;
+        }
+    }
+
+    /// What the force loop scans: the whole list, or the pairs a prune keeps.
+    pub fn prune(&self) -> &PrunePlan {
+        &self.prune
     }
 
     /// Rebuilds the list: wraps positions into the region, re-sorts particles by cell, finds
@@ -434,6 +466,8 @@ impl NeighborList {
         self.reference_lo = domain.lo;
         self.interaction_cutoff = 2.0 * a_max + self.range;
         self.builds += 1;
+        // The first force evaluation scans the whole new list anyway: it prunes.
+        self.prune_at(particles, domain, self.skin, 0.0);
         Ok(())
     }
 
@@ -1079,6 +1113,101 @@ mod tests {
                 "{deformation}: two particles off"
             );
         }
+    }
+
+    /// The bound on the skin's closing since the build, from the moves since a prune,
+    /// holds for any deformation and any shift of the box's corner between the two: 300
+    /// random histories of 64 particles (shear, stretch and general maps, moves of up to
+    /// 0.1 per axis, corners shifted by up to 0.2), half of them following the box's map
+    /// after the prune (where the bound's terms in `‖B‖` matter).
+    #[test]
+    fn the_moves_since_a_prune_bound_those_since_the_build() {
+        use rand::{RngExt, SeedableRng};
+        type Rng = rand_xoshiro::Xoshiro256PlusPlus;
+        let mut rng = Rng::seed_from_u64(3);
+        let team = Team::new(2);
+        let random = |rng: &mut Rng, scale: f64| {
+            DVec3::new(rng.random::<f64>(), rng.random(), rng.random()) * (2.0 * scale) - scale
+        };
+        // A map of each kind, by turns: simple shear, a stretch of y, anything.
+        let deform = |rng: &mut Rng, domain: &mut Domain, kind: usize| {
+            let small = random(rng, 0.05);
+            let step = match kind % 3 {
+                0 => DMat3::from_cols(DVec3::X, DVec3::new(small.x, 1.0, 0.0), DVec3::Z),
+                1 => DMat3::from_diagonal(DVec3::new(1.0, 1.0 + small.y, 1.0)),
+                _ => {
+                    let (a, b) = (random(rng, 0.03), random(rng, 0.03));
+                    DMat3::IDENTITY + DMat3::from_cols(a, small, b)
+                }
+            };
+            domain.deformation = step * domain.deformation;
+        };
+        let shift_and_move = |rng: &mut Rng, p: &mut Particles, domain: &mut Domain| {
+            domain.lo += random(rng, 0.2);
+            for r in &mut p.position {
+                *r += random(rng, 0.1);
+            }
+        };
+        let mut tight = 0.0f64;
+        for trial in 0..300 {
+            let mut p = Particles::default();
+            for _ in 0..64 {
+                let sphere = Sphere {
+                    position: random(&mut rng, 4.0) + 4.0,
+                    velocity: DVec3::ZERO,
+                    angular_velocity: DVec3::ZERO,
+                    radius: 0.3,
+                    species: 0,
+                    motion: Motion::Free,
+                };
+                p.push(sphere, 1.0);
+            }
+            let mut domain = Domain::new(DVec3::ZERO, DVec3::splat(8.0), [true; 3]);
+            let mut list = NeighborList::new(0.4, 0.0);
+            list.build(&mut p, &domain, &team, 0.0).expect("list");
+            deform(&mut rng, &mut domain, trial);
+            shift_and_move(&mut rng, &mut p, &mut domain);
+            let build = |list: &NeighborList| {
+                (
+                    list.reference_position.clone(),
+                    list.reference_deformation,
+                    list.reference_lo,
+                )
+            };
+            let (r0, f0, lo0) = build(&list);
+            let at_prune = moves(&p, &domain, &team, (&r0, f0, lo0));
+            list.prune_at(&p, &domain, list.skin, at_prune.sum);
+            assert!(list.prune.is_active());
+            // Every other history follows the box's map exactly after the prune, so that
+            // the displacements since the build change only through it.
+            let (before, lo) = (domain.deformation, domain.lo);
+            deform(&mut rng, &mut domain, trial);
+            if trial % 2 == 0 {
+                let affine = domain.deformation * before.inverse() - DMat3::IDENTITY;
+                for r in &mut p.position {
+                    *r += affine * (*r - lo);
+                }
+                domain.lo += random(&mut rng, 0.2);
+            } else {
+                shift_and_move(&mut rng, &mut p, &mut domain);
+            }
+            let reach = list.interaction_cutoff + list.skin;
+            let exact = moves(&p, &domain, &team, (&r0, f0, lo0)).closing(reach);
+            let since_prune = moves(
+                &p,
+                &domain,
+                &team,
+                (&list.prune_position, list.prune_deformation, list.prune_lo),
+            );
+            let bound = list.bound_since_build(&domain, since_prune);
+            assert!(exact <= bound, "trial {trial}: {exact} > {bound}");
+            tight = tight.max(exact / bound);
+        }
+        // Not a bound that says nothing: at times it is close to the truth.
+        assert!(
+            tight > 0.5,
+            "the bound is loose: at best {tight} of it is reached"
+        );
     }
 
     #[test]
