@@ -109,6 +109,23 @@ impl ContactObserver for ContactSums {
     }
 }
 
+/// What the contacts of a measured step say: the part of [`Observables`] that comes from the
+/// contact sums alone, without a walk over the neighbour list.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ContactSummary {
+    /// Elastic energy stored in contacts (J).
+    pub elastic_energy: f64,
+    /// Contacts with `δ > 0` (particle pairs and wall contacts).
+    pub contacts: u64,
+    /// Fraction of contacts that slide.
+    pub sliding_fraction: f64,
+    /// Coordination number `Z = 2 N_c / N` over free particles.
+    pub coordination: f64,
+    /// Pairs apart that still attract (open liquid bridges, reversible range), per free
+    /// particle.
+    pub bridges_per_particle: f64,
+}
+
 /// One row of the time series.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Observables {

@@ -9,7 +9,8 @@ use crate::domain::Domain;
 use crate::forces::{ForceScratch, pair_forces};
 use crate::integrate::{add_gravity, drift, kick, kick_drift};
 use crate::measure::{
-    ContactSums, Observables, granular_temperature, kinetic_energies, kinetic_stress_sum, to_rows,
+    ContactSummary, ContactSums, Observables, granular_temperature, kinetic_energies,
+    kinetic_stress_sum, to_rows,
 };
 use crate::neighbor::{NeighborError, NeighborList};
 use crate::observe::{ContactObserver, PartLoads, StressSum};
@@ -390,20 +391,13 @@ impl Simulation {
         self.measured.0
     }
 
-    /// The observables at the current state. Contact quantities come from the last step
-    /// taken with `measure = true` (see [`Simulation::measured_step`]).
-    pub fn observables(&self) -> Observables {
-        let p = &self.particles;
-        let (kt, kr) = kinetic_energies(p, &self.domain);
+    /// The contact quantities of [`Simulation::observables`] (from the last step taken
+    /// with `measure = true`), without the walk over the neighbour list that the
+    /// coordination without rattlers takes.
+    pub fn contact_summary(&self) -> ContactSummary {
         let sums = &self.measured.1;
-        let volume = self.domain.volume();
-        let stress = (kinetic_stress_sum(p, &self.domain) + sums.stress_sum) / volume;
-        let free = p.free_count().max(1) as f64;
-        Observables {
-            time: self.time,
-            step: self.step,
-            kinetic_translational: kt,
-            kinetic_rotational: kr,
+        let free = self.particles.free_count().max(1) as f64;
+        ContactSummary {
             elastic_energy: sums.elastic_energy,
             contacts: sums.contacts,
             sliding_fraction: if sums.contacts > 0 {
@@ -412,8 +406,36 @@ impl Simulation {
                 0.0
             },
             coordination: 2.0 * sums.contacts as f64 / free,
-            coordination_without_rattlers: self.coordination_without_rattlers(),
             bridges_per_particle: sums.attracting_apart as f64 / free,
+        }
+    }
+
+    /// Kinetic energies `(½ Σ m v², ½ Σ I ω²)` of the free particles (J) at the current
+    /// state, as [`Simulation::observables`] reports them.
+    pub fn kinetic_energies(&self) -> (f64, f64) {
+        kinetic_energies(&self.particles, &self.domain)
+    }
+
+    /// The observables at the current state. Contact quantities come from the last step
+    /// taken with `measure = true` (see [`Simulation::measured_step`]).
+    pub fn observables(&self) -> Observables {
+        let p = &self.particles;
+        let (kt, kr) = kinetic_energies(p, &self.domain);
+        let sums = &self.measured.1;
+        let volume = self.domain.volume();
+        let stress = (kinetic_stress_sum(p, &self.domain) + sums.stress_sum) / volume;
+        let c = self.contact_summary();
+        Observables {
+            time: self.time,
+            step: self.step,
+            kinetic_translational: kt,
+            kinetic_rotational: kr,
+            elastic_energy: c.elastic_energy,
+            contacts: c.contacts,
+            sliding_fraction: c.sliding_fraction,
+            coordination: c.coordination,
+            coordination_without_rattlers: self.coordination_without_rattlers(),
+            bridges_per_particle: c.bridges_per_particle,
             volume_fraction: p.free_volume() / volume,
             box_size: self.domain.lengths().to_array(),
             granular_temperature: granular_temperature(p, &self.domain),

@@ -1113,7 +1113,8 @@ impl SplitBottomRun {
     /// The row of the current (just measured) state.
     fn row(&self) -> Row {
         let sim = &self.simulation;
-        let o = sim.observables();
+        let (kinetic_translational, kinetic_rotational) = sim.kinetic_energies();
+        let c = sim.contact_summary();
         let ring = 2.0 * PI / self.geometry.angle;
         let mut torque = [0.0; 5];
         for (t, load) in torque.iter_mut().zip(sim.part_loads()) {
@@ -1126,12 +1127,12 @@ impl SplitBottomRun {
             time: sim.time,
             stage: self.stage,
             angle,
-            kinetic_energy: o.kinetic_translational + o.kinetic_rotational,
-            kinetic_translational: o.kinetic_translational,
-            elastic_energy: o.elastic_energy,
-            contacts: o.contacts,
-            coordination: o.coordination,
-            bridges_per_particle: o.bridges_per_particle,
+            kinetic_energy: kinetic_translational + kinetic_rotational,
+            kinetic_translational,
+            elastic_energy: c.elastic_energy,
+            contacts: c.contacts,
+            coordination: c.coordination,
+            bridges_per_particle: c.bridges_per_particle,
             surface_height: self.surface_height(),
             net_torque: torque[INNER_WALL as usize] + torque[INNER_BOTTOM as usize]
                 - torque[OUTER_BOTTOM as usize]
