@@ -28,8 +28,8 @@ use std::sync::atomic::{AtomicU64, Ordering};
 ///
 /// Chosen by measurement on the standard problem (BENCHMARKS.md): a fifth of the skin
 /// (0.04 of a mean diameter of 1) keeps about three quarters of the list's pairs, and one
-/// scan in about a dozen covers the whole list. Anything from a tenth to a quarter runs
-/// equally fast within the noise: a smaller margin keeps fewer pairs but prunes more often.
+/// scan in about a dozen covers the whole list. From 0.15 to 0.3 of the skin ran equally
+/// fast within the noise: a smaller margin keeps fewer pairs but prunes more often.
 pub const INNER_SKIN_FRACTION: f64 = 0.2;
 
 /// Below this fraction of the inner skin, what is left of the Verlet skin is not worth a
