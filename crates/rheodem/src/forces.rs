@@ -97,7 +97,10 @@ struct Inputs<'a> {
 /// contact history over `dt` (s). `flow_rate` (1/s) is subtracted as `γ̇ l_y x̂` from each
 /// contact's relative velocity (zero in the lab frame; see `LeesEdwards::peculiar_contacts`).
 /// Every interacting pair is shown to the observer `O`, whose merged observations are
-/// returned. The chunks are shared among the members of `team`.
+/// returned. The chunks are shared among the members of `team`. The list must have been
+/// checked ([`NeighborList::needs_rebuild`], and rebuilt if need be) since the particles
+/// last moved: between checks the loop scans only the pairs of the list's last prune
+/// ([`crate::prune`]).
 #[allow(clippy::too_many_arguments)]
 pub fn pair_forces<O: ContactObserver>(
     particles: &mut Particles,
@@ -355,7 +358,9 @@ fn chunk_forces_generic<O: ContactObserver, const AVX: bool>(
         if kept.len() < pairs {
             kept.resize(pairs, Kept::default());
         }
-        *pruned = (stamp, range.clone());
+        // Stamped once the scan is through, so that a scan cut short leaves no kept
+        // pairs for the next call to trust.
+        *pruned = (0, 0..0);
         Source::Prune {
             margin,
             kept: &mut kept[..],
@@ -373,11 +378,15 @@ fn chunk_forces_generic<O: ContactObserver, const AVX: bool>(
         within,
         lost,
     };
+    let prunes = matches!(source, Source::Prune { .. });
     let (n, n_lost) = if inp.free_range < inp.max_range {
         scan.run::<true>(inp, source)
     } else {
         scan.run::<false>(inp, source)
     };
+    if prunes {
+        *pruned = (stamp, range.clone());
+    }
     for &local in &lost[..n_lost] {
         active[local as usize] = false;
         history.clear(local as usize);
