@@ -270,8 +270,7 @@ struct Candidate {
     code: u8,
     /// `r_i − r_j` through the image (m).
     branch: DVec3,
-    /// `|r_i − r_j|²` (m²) as pass 1a writes it; pass 1b replaces it by its square root,
-    /// the distance `|r_i − r_j|` (m) that the contact law reads.
+    /// `|r_i − r_j|²` (m²); the contact law takes its square root, four pairs at a time.
     dist: f64,
 }
 
@@ -367,6 +366,17 @@ fn chunk_forces_generic<O: ContactObserver, const AVX: bool>(
             n_kept,
         }
     };
+    // With one species, every pair has the same kernel.
+    let uniform = inp.laws.species() == 1;
+    // Under one irreversible law the scan itself sorts the pairs it finds into touching
+    // pairs and pairs apart: it looks for pairs without a bridge up to contact only, so
+    // every pair apart within reach is bridged and acts. Elsewhere pass 1b sorts them.
+    let gated = inp.free_range < inp.max_range;
+    let sorts = uniform && inp.max_range > 0.0 && gated;
+    if sorts && touching.len() < pairs {
+        touching.resize(pairs, 0);
+        apart.resize(pairs, 0);
+    }
     // Under irreversible laws alone, a pair apart acts only through its bridge, so only
     // bridged pairs are looked for beyond contact (most pairs apart within a bridge's
     // range have never touched).
@@ -377,56 +387,63 @@ fn chunk_forces_generic<O: ContactObserver, const AVX: bool>(
         bridge: history.bridge,
         within,
         lost,
+        touching,
+        apart,
     };
     let prunes = matches!(source, Source::Prune { .. });
-    let (n, n_lost) = if inp.free_range < inp.max_range {
-        scan.run::<true>(inp, source)
+    let counts = if sorts {
+        scan.run::<true, true>(inp, source)
+    } else if gated {
+        scan.run::<true, false>(inp, source)
     } else {
-        scan.run::<false>(inp, source)
+        scan.run::<false, false>(inp, source)
     };
     if prunes {
         *pruned = (stamp, range.clone());
     }
-    for &local in &lost[..n_lost] {
+    for &local in &lost[..counts.lost] {
         active[local as usize] = false;
         history.clear(local as usize);
     }
-    // Pass 1b: touching pairs, and pairs apart within an adhesive law's range, as
-    // indices into `within`, again without a branch on the distance (under an adhesive
-    // law about half the pairs within reach touch). A pair apart without a bridge under
-    // an irreversible law has no force and drops its history.
+    let n = counts.within;
+    // Pass 1b, where the scan did not sort: touching pairs, and pairs apart within an
+    // adhesive law's range, as indices into `within`, again without a branch on the
+    // distance (under an adhesive law about half the pairs within reach touch). A pair
+    // apart without a bridge under an irreversible law has no force and drops its
+    // history.
     if touching.len() < n {
         touching.resize(n, 0);
         apart.resize(n, 0);
     }
-    // With one species, every pair has the same kernel.
-    let uniform = inp.laws.species() == 1;
-    let split = Split {
-        within: &mut within[..n],
-        bridge: history.bridge,
-        active,
-        touching,
-        apart,
-        lost,
-    };
-    let (n_touching, n_apart, n_lost) = if inp.max_range == 0.0 {
+    let (n_touching, n_apart) = if inp.max_range == 0.0 {
         // No law acts beyond contact: every pair within reach touches (`d² < fl(s²)`
-        // gives `√d² ≤ s`, as the correctly rounded square root of a rounded square is
-        // the number itself), so they all go to the law, in order.
-        for (q, c) in split.within.iter_mut().enumerate() {
-            c.dist = c.dist.sqrt();
-            split.touching[q] = q as u32;
+        // gives `√d² ≤ s`, see [`touches`]), so they all go to the law, in order.
+        for (q, t) in touching[..n].iter_mut().enumerate() {
+            *t = q as u32;
         }
-        (n, 0, 0)
-    } else if inp.laws.forms_bridges() {
-        split.run::<true>(inp, uniform)
+        (n, 0)
+    } else if sorts {
+        (counts.touching, counts.apart)
     } else {
-        split.run::<false>(inp, uniform)
+        let split = Split {
+            within: &within[..n],
+            bridge: history.bridge,
+            active,
+            touching,
+            apart,
+            lost,
+        };
+        let (n_touching, n_apart, n_lost) = if inp.laws.forms_bridges() {
+            split.run::<true>(inp, uniform)
+        } else {
+            split.run::<false>(inp, uniform)
+        };
+        for &local in &lost[..n_lost] {
+            active[local as usize] = false;
+            history.clear(local as usize);
+        }
+        (n_touching, n_apart)
     };
-    for &local in &lost[..n_lost] {
-        active[local as usize] = false;
-        history.clear(local as usize);
-    }
     // Pass 2: the contact law over each kind of pair, four at a time.
     let within = &within[..n];
     let same_kernel = |batch: &[u32]| {
@@ -514,6 +531,11 @@ struct Scan<'a> {
     /// Filled with the pairs that had a force and are now out of reach (indices into the
     /// chunk's pairs); holds at least as many as the chunk's pairs.
     lost: &'a mut [u32],
+    /// Filled, when the scan sorts the pairs it finds, with the touching ones (indices
+    /// into `within`); holds at least as many as the chunk's pairs.
+    touching: &'a mut [u32],
+    /// Likewise with the pairs apart within reach.
+    apart: &'a mut [u32],
 }
 
 /// The pairs pass 1a scans.
@@ -537,9 +559,14 @@ impl Scan<'_> {
     /// list pairs touch, so that branch would be unpredictable), in one flat loop over the
     /// pairs of `source` (a loop per row would end at an unpredictable length). The reach
     /// is the contact plus [`Inputs::max_range`], or, when `GATED`, plus
-    /// [`Inputs::free_range`] for a pair without a bridge. Returns the two counts.
+    /// [`Inputs::free_range`] for a pair without a bridge. With `SORT` the pairs within reach
+    /// are also sorted into touching pairs and pairs apart. Returns the counts.
     #[inline(always)]
-    fn run<const GATED: bool>(self, inp: &Inputs<'_>, source: Source<'_>) -> (usize, usize) {
+    fn run<const GATED: bool, const SORT: bool>(
+        self,
+        inp: &Inputs<'_>,
+        source: Source<'_>,
+    ) -> Counts {
         let Scan {
             base,
             end,
@@ -547,10 +574,13 @@ impl Scan<'_> {
             bridge,
             within,
             lost,
+            touching,
+            apart,
         } = self;
         let pairs = end - base;
         assert!(active.len() >= pairs && bridge.len() >= pairs);
         assert!(within.len() >= pairs && lost.len() >= pairs);
+        assert!(!SORT || (touching.len() >= pairs && apart.len() >= pairs));
         let (first, partner, image) = (
             &inp.first[base..end],
             &inp.partner[base..end],
@@ -561,10 +591,11 @@ impl Scan<'_> {
             bridge,
             within,
             lost,
+            touching,
+            apart,
             free: inp.free_range.to_bits(),
             bridged: inp.max_range.to_bits(),
-            n: 0,
-            n_lost: 0,
+            counts: Counts::default(),
         };
         match source {
             Source::List => {
@@ -573,7 +604,7 @@ impl Scan<'_> {
                     // rows and partners are slots (the list fits the particles, checked by
                     // `pair_forces`).
                     unsafe {
-                        sink.visit::<GATED>(
+                        sink.visit::<GATED, SORT>(
                             inp,
                             at(first, local) as usize,
                             at(partner, local) as usize,
@@ -596,7 +627,7 @@ impl Scan<'_> {
                     unsafe {
                         let (i, j, code) = (at(first, local), at(partner, local), at(image, local));
                         let (d2, reach) =
-                            sink.visit::<GATED>(inp, i as usize, j as usize, code, local);
+                            sink.visit::<GATED, SORT>(inp, i as usize, j as usize, code, local);
                         let outer = reach + margin;
                         *at_mut(kept, k) = Kept {
                             i,
@@ -614,7 +645,7 @@ impl Scan<'_> {
                     // SAFETY: the prune kept pairs of this chunk's slices (its stamp and
                     // range were checked by the caller), with their slots.
                     unsafe {
-                        sink.visit::<GATED>(
+                        sink.visit::<GATED, SORT>(
                             inp,
                             p.i as usize,
                             p.j as usize,
@@ -625,8 +656,21 @@ impl Scan<'_> {
                 }
             }
         }
-        (sink.n, sink.n_lost)
+        sink.counts
     }
+}
+
+/// How many pairs pass 1a wrote into each of its arrays.
+#[derive(Clone, Copy, Debug, Default)]
+struct Counts {
+    /// Pairs within reach.
+    within: usize,
+    /// Pairs that had a force and are now out of reach.
+    lost: usize,
+    /// Touching pairs, when the scan sorts them.
+    touching: usize,
+    /// Pairs apart within reach, when the scan sorts them.
+    apart: usize,
 }
 
 /// Where pass 1a writes the pairs it visits.
@@ -637,26 +681,31 @@ struct Sink<'a> {
     bridge: &'a [bool],
     /// Pairs within reach, the first `n` of them found.
     within: &'a mut [Candidate],
-    /// Pairs that had a force and are now out of reach, the first `n_lost` of them found.
+    /// Pairs that had a force and are now out of reach, the first `counts.lost` of them
+    /// found.
     lost: &'a mut [u32],
+    /// Touching pairs found (indices into `within`), when sorting.
+    touching: &'a mut [u32],
+    /// Pairs apart within reach found (indices into `within`), when sorting.
+    apart: &'a mut [u32],
     /// The bits of [`Inputs::free_range`] and [`Inputs::max_range`].
     free: u64,
     bridged: u64,
-    n: usize,
-    n_lost: usize,
+    counts: Counts,
 }
 
 impl Sink<'_> {
     /// The chunk's pair `local`, of slots `i` and `j` (seen through image `code`):
-    /// written into `within` and `lost`, each count advancing when it belongs there.
-    /// Returns its squared distance and its reach (m², m).
+    /// written into `within` and `lost` (and with `SORT` into `touching` and `apart`),
+    /// each count advancing when it belongs there. Returns its squared distance and its
+    /// reach (m², m).
     ///
     /// # Safety
     /// `i` and `j` are slots of the particle arrays and `local` a pair of the chunk, below
     /// the lengths of `active` and `bridge`; fewer pairs have been visited than `within`
     /// and `lost` hold.
     #[inline(always)]
-    unsafe fn visit<const GATED: bool>(
+    unsafe fn visit<const GATED: bool, const SORT: bool>(
         &mut self,
         inp: &Inputs<'_>,
         i: usize,
@@ -675,12 +724,21 @@ impl Sink<'_> {
             } else {
                 inp.max_range
             };
-            let (c, reach) = inp.candidate(i, j, code, local, range);
+            let (c, sum, reach) = inp.candidate(i, j, code, local, range);
             let (d2, inside) = (c.dist, c.dist < reach * reach);
-            *at_mut(self.within, self.n) = c;
-            self.n += usize::from(inside);
-            *at_mut(self.lost, self.n_lost) = local as u32;
-            self.n_lost += usize::from(at(self.active, local) & !inside);
+            let n = &mut self.counts;
+            let q = n.within;
+            *at_mut(self.within, q) = c;
+            n.within += usize::from(inside);
+            *at_mut(self.lost, n.lost) = local as u32;
+            n.lost += usize::from(at(self.active, local) & !inside);
+            if SORT {
+                let touches = touches(d2, sum);
+                *at_mut(self.touching, n.touching) = q as u32;
+                n.touching += usize::from(inside & touches);
+                *at_mut(self.apart, n.apart) = q as u32;
+                n.apart += usize::from(inside & !touches);
+            }
             (d2, reach)
         }
     }
@@ -688,8 +746,8 @@ impl Sink<'_> {
 
 /// Pass 1b of [`chunk_forces`]: the arrays it reads and fills.
 struct Split<'a> {
-    /// Pairs within reach; their squared distance becomes the distance.
-    within: &'a mut [Candidate],
+    /// Pairs within reach.
+    within: &'a [Candidate],
     /// Bridge flags of the chunk's pairs.
     bridge: &'a [bool],
     /// Force flags of the chunk's pairs.
@@ -723,7 +781,7 @@ impl Split<'_> {
         assert!(touching.len() >= within.len() && apart.len() >= within.len());
         assert!(lost.len() >= within.len());
         let (mut n_touching, mut n_apart, mut n_lost) = (0, 0, 0);
-        for (q, c) in within.iter_mut().enumerate() {
+        for (q, c) in within.iter().enumerate() {
             let (i, j, local) = (c.i as usize, c.j as usize, c.local as usize);
             let needs_bridge = BRIDGES && (uniform || inp.kernel_of(c).needs_bridge());
             // SAFETY: the pair was found in the list, which fits the particles: `i` and
@@ -732,8 +790,7 @@ impl Split<'_> {
             // `touching`, `apart` and `lost` (asserted above).
             unsafe {
                 let sum = at(inp.radius, i) + at(inp.radius, j);
-                c.dist = c.dist.sqrt();
-                let touches = sum - c.dist >= 0.0;
+                let touches = touches(c.dist, sum);
                 let acts = !needs_bridge || at(bridge, local);
                 *at_mut(touching, n_touching) = q as u32;
                 n_touching += usize::from(touches);
@@ -747,6 +804,21 @@ impl Split<'_> {
         }
         (n_touching, n_apart, n_lost)
     }
+}
+
+/// Whether a pair at squared distance `d2` (m²) touches, for the sum of radii `s` (m):
+/// `s − √d2 ≥ 0` with the square root rounded, as the law computes it, without taking the
+/// root save in rare cases. `d2 ≤ fl(s²)` implies it, as the rounded root is monotone and
+/// the rounded root of a rounded square is the number itself (base 2, no underflow).
+/// Above `fl(s²)` the root rounds down to `s` only within a relative `2⁻⁵⁰` of it, where
+/// it is taken.
+#[inline(always)]
+fn touches(d2: f64, s: f64) -> bool {
+    let s2 = s * s;
+    if d2 > s2 && d2 <= s2 * (1.0 + 8.0 * f64::EPSILON) {
+        return s - d2.sqrt() >= 0.0;
+    }
+    d2 <= s2
 }
 
 /// The pairs of `batch` (indices into `within`), one per lane; the lanes past
@@ -793,7 +865,7 @@ impl Inputs<'_> {
         code: u8,
         local: usize,
         range: f64,
-    ) -> (Candidate, f64) {
+    ) -> (Candidate, f64, f64) {
         // SAFETY: `i` and `j` are slots (the caller's contract).
         let (r_i, a_i, r_j, a_j) = unsafe {
             (
@@ -810,7 +882,8 @@ impl Inputs<'_> {
         };
         let branch = r_i - r_j;
         let d2 = branch.length_squared();
-        let reach = a_i + a_j + range;
+        let sum = a_i + a_j;
+        let reach = sum + range;
         let c = Candidate {
             local: local as u32,
             i: i as u32,
@@ -819,7 +892,7 @@ impl Inputs<'_> {
             branch,
             dist: d2,
         };
-        (c, reach)
+        (c, sum, reach)
     }
 
     /// The kernel of a pair.
@@ -943,6 +1016,7 @@ fn apart_batch<O: ContactObserver, const AVX: bool>(
             F4::from_array::<AVX>(radius_j),
         )
     };
+    let dist = dist.sqrt();
     let normal = branch.scale(F4::splat(1.0) / dist);
     let separation = -((radius_i + radius_j) - dist);
     let (f_a, alive) = kernel.apart_lanes::<F4, false>(separation, radius_i, radius_j, bridge);
@@ -982,7 +1056,7 @@ fn apart_batch<O: ContactObserver, const AVX: bool>(
                 image,
                 position: inp.position[i],
                 branch: c.branch,
-                kinematics: &inp.kinematics(i, j, c.code, c.branch, c.dist),
+                kinematics: &inp.kinematics(i, j, c.code, c.branch, dist.0[l]),
                 force: &pf,
                 kernel,
                 history: &history.get(local),
@@ -1069,6 +1143,7 @@ fn touch_batch<O: ContactObserver, const AVX: bool>(
         )
     };
     let one = F4::splat(1.0);
+    let dist = dist.sqrt();
     pair.normal = pair.normal.scale(one / dist);
     pair.overlap = (pair.radius_i + pair.radius_j) - dist;
     pair.reduced_mass = one / inv_mass;
@@ -1384,6 +1459,35 @@ mod tests {
                 assert!(builds > 1, "{at}: {builds} builds");
             }
         }
+    }
+
+    /// The test without the root agrees with the law's `s − √d2 ≥ 0` on squared distances
+    /// a few units in the last place around `fl(s²)` and at random, for sums of radii over
+    /// twelve decades; above `fl(s²)` some still touch (the root rounds down to `s`).
+    #[test]
+    fn touching_is_told_from_the_squared_distance_as_from_the_distance() {
+        let mut rng = rand_xoshiro::Xoshiro256PlusPlus::seed_from_u64(3);
+        let mut above_and_touching = 0;
+        for _ in 0..20_000 {
+            let s = 10f64.powf(rng.random_range(-7.0..5.0)) * rng.random_range(1.0..10.0);
+            let s2 = s * s;
+            let mut d2 = s2;
+            for _ in 0..6 {
+                d2 = d2.next_down();
+            }
+            let near = (0..13).map(|_| {
+                let x = d2;
+                d2 = d2.next_up();
+                x
+            });
+            let random = (0..4).map(|_| s2 * rng.random_range(0.5..1.5));
+            for d2 in near.chain(random) {
+                let law = s - d2.sqrt() >= 0.0;
+                assert_eq!(touches(d2, s), law, "s = {s:e}, d² = {d2:e}");
+                above_and_touching += usize::from(law && d2 > s2);
+            }
+        }
+        assert!(above_and_touching > 0);
     }
 
     #[test]
