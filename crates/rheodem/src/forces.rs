@@ -372,7 +372,8 @@ fn chunk_forces_generic<O: ContactObserver, const AVX: bool>(
     // pairs and pairs apart: it looks for pairs without a bridge up to contact only, so
     // every pair apart within reach is bridged and acts. Elsewhere pass 1b sorts them.
     let gated = inp.free_range < inp.max_range;
-    let sorts = uniform && inp.max_range > 0.0 && gated;
+    // (`gated` implies a law with a range: `0 ≤ free_range < max_range`.)
+    let sorts = uniform && gated;
     if sorts && touching.len() < pairs {
         touching.resize(pairs, 0);
         apart.resize(pairs, 0);
