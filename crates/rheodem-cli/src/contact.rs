@@ -237,9 +237,11 @@ fn curve(a: CurveArgs) -> Result<()> {
                 label: "separation",
                 points: &legs[1],
             },
+            // Dashed: it retraces the first approach where the bridge holds, which would
+            // hide it under a solid line.
             Series {
-                dashed_as: None,
-                label: "second approach",
+                dashed_as: Some(2),
+                label: "second approach (dashed over the first)",
                 points: &legs[2],
             },
         ],

@@ -3,14 +3,15 @@
 mod cg;
 mod contact;
 mod predict;
+mod progress;
 mod shear;
 mod split_bottom;
 mod study;
 
 use anyhow::{Context, Result, bail};
 use clap::{Parser, Subcommand};
-use indicatif::{ProgressBar, ProgressStyle};
 use rheodem::bench::BenchCohesion;
+use rheodem::io::made_by::{self, Maker};
 use rheodem::run::Run;
 use rheodem::scenario::Scenario;
 use std::path::{Path, PathBuf};
@@ -46,6 +47,10 @@ enum Command {
         /// No progress bar; only the final line.
         #[arg(long, short)]
         quiet: bool,
+        /// Refuse a scenario whose estimated memory exceeds this size (e.g. 8GiB, 500MB;
+        /// default: the machine's physical memory).
+        #[arg(long, value_name = "SIZE")]
+        max_memory: Option<String>,
     },
     /// Continue a run from its last checkpoint.
     Resume {
@@ -100,7 +105,7 @@ enum Command {
         /// The sweep's output directory (or its results archive).
         dir: PathBuf,
     },
-    /// The wet split-bottom study of Roy et al. 2017 over finished split-bottom runs: c*
+    /// The wet split-bottom study of Roy et al. 2016 over finished split-bottom runs: c*
     /// against the rupture distance and the surface tension, torques, with the papers'
     /// coefficients (markdown) and figures.
     WetStudy {
@@ -125,6 +130,13 @@ enum Command {
     Check {
         /// The scenario (TOML).
         scenario: PathBuf,
+        /// Worker threads the run would use, for the memory estimate (default: all cores).
+        #[arg(long, short)]
+        threads: Option<usize>,
+        /// Refuse a scenario whose estimated memory exceeds this size (e.g. 8GiB, 500MB;
+        /// default: the machine's physical memory).
+        #[arg(long, value_name = "SIZE")]
+        max_memory: Option<String>,
     },
     /// Throughput on the standard problem (crates/rheodem/data/bench-packing.txt, see
     /// BENCHMARKS.md), in particle-steps per second.
@@ -168,10 +180,27 @@ fn main() -> ExitCode {
     match run(Cli::parse()) {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
-            eprintln!("error: {e:#}");
+            eprintln!("error: {}", error_chain(&e));
             ExitCode::FAILURE
         }
     }
+}
+
+/// The error and its causes, joined by `: `, leaving out a cause whose text an earlier
+/// message already holds (an error that quotes its source would print it twice).
+fn error_chain(e: &anyhow::Error) -> String {
+    let mut out = String::new();
+    for cause in e.chain() {
+        let text = cause.to_string();
+        if out.contains(&text) {
+            continue;
+        }
+        if !out.is_empty() {
+            out.push_str(": ");
+        }
+        out.push_str(&text);
+    }
+    out
 }
 
 /// Oversubscription allowed beyond the logical CPUs (to resume, bit for bit, a run
@@ -233,6 +262,17 @@ pub(crate) fn for_each_point(
     errors.into_inner().unwrap_or_default()
 }
 
+/// The memory limit of a run (bytes): `--max-memory` if given, else the machine's physical
+/// memory (none where the system does not say).
+pub(crate) fn memory_limit(max_memory: Option<&str>) -> Result<Option<u64>> {
+    match max_memory {
+        Some(text) => rheodem::memory::parse_size(text)
+            .map(Some)
+            .map_err(|e| anyhow::anyhow!("--max-memory {e}")),
+        None => Ok(rheodem::memory::physical_memory()),
+    }
+}
+
 /// A thread pool of `threads` workers (default: all logical CPUs), checked as `--threads`.
 pub(crate) fn pool(threads: Option<usize>) -> Result<(rayon::ThreadPool, usize)> {
     let n = worker_count("--threads", threads.unwrap_or_else(cpus))?;
@@ -254,7 +294,9 @@ fn run(cli: Cli) -> Result<()> {
             seed,
             force,
             quiet,
+            max_memory,
         } => {
+            let limit = memory_limit(max_memory.as_deref())?;
             let (mut sc, name, base) = match &scenario {
                 Some(path) => (
                     Scenario::from_file(path)?,
@@ -272,14 +314,22 @@ fn run(cli: Cli) -> Result<()> {
                 sc.seed = s;
             }
             let dir = out.unwrap_or_else(|| Path::new("runs").join(&name));
+            if !force {
+                made_by::expect(&dir, Maker::Run).map_err(|e| anyhow::anyhow!("{e}"))?;
+            }
             let shown = scenario
                 .as_ref()
                 .map_or("the built-in default scenario".to_string(), |p| {
                     p.display().to_string()
                 });
             let (pool, n) = pool(threads)?;
+            let (particles, bytes) =
+                rheodem::scenario::size::memory_estimate(&sc, &base, n, limit)?;
             if !quiet {
-                eprintln!("preparing {shown} …");
+                eprintln!(
+                    "preparing {shown} ({particles} particles, about {} of memory) …",
+                    rheodem::memory::Bytes(bytes)
+                );
             }
             let mut r = pool.install(|| Run::start(sc, &base, &dir, n, force))?;
             for w in &r.resolved.warnings {
@@ -304,6 +354,31 @@ fn run(cli: Cli) -> Result<()> {
             threads,
             quiet,
         } => {
+            match made_by::read(&dir) {
+                Some(Maker::Run) | None if dir.join("checkpoint.bin").exists() => {}
+                Some(Maker::Run) => bail!(
+                    "{} holds a `rheodem run` that stopped before its first checkpoint (during \
+                     its preparation, say): start it again with `rheodem run SCENARIO --out {} \
+                     --force`",
+                    dir.display(),
+                    dir.display()
+                ),
+                Some(other) => bail!(
+                    "{} holds a `rheodem {}` run, which `resume` does not continue: {}",
+                    dir.display(),
+                    other.name(),
+                    other.how_to_continue(&dir)
+                ),
+                None => bail!(
+                    "{} holds no rheodem run (no checkpoint.bin){}",
+                    dir.display(),
+                    if dir.exists() {
+                        ""
+                    } else {
+                        ": no such directory"
+                    }
+                ),
+            }
             let mut r = Run::resume(&dir)?;
             if threads.is_none() && r.threads > MAX_THREADS_PER_CPU * cpus() {
                 bail!(
@@ -359,9 +434,25 @@ fn run(cli: Cli) -> Result<()> {
         Command::Db(cmd) => shear::db(cmd),
         Command::Study(cmd) => study::study(cmd),
         Command::Compare { dir, figures } => shear::compare(&dir, figures.as_deref()),
-        Command::Check { scenario } => {
+        Command::Check {
+            scenario,
+            threads,
+            max_memory,
+        } => {
+            let limit = memory_limit(max_memory.as_deref())?;
+            let threads = worker_count("--threads", threads.unwrap_or_else(cpus))?;
             let sc = Scenario::from_file(&scenario)?;
             let base = scenario.parent().unwrap_or(Path::new("."));
+            let (particles, bytes) =
+                rheodem::scenario::size::memory_estimate(&sc, base, threads, limit)?;
+            eprintln!(
+                "note: {particles} particles, an estimated {} of memory on {threads} threads{}",
+                rheodem::memory::Bytes(bytes),
+                limit.map_or(String::new(), |l| format!(
+                    " (limit {})",
+                    rheodem::memory::Bytes(l)
+                ))
+            );
             let checked = rheodem::scenario::check(&sc, base)?;
             for w in &checked.resolved.warnings {
                 eprintln!("warning: {w}");
@@ -447,24 +538,15 @@ fn run(cli: Cli) -> Result<()> {
 }
 
 fn advance(pool: &rayon::ThreadPool, r: &mut Run, dir: &Path, quiet: bool) -> Result<()> {
-    let bar = if quiet {
-        ProgressBar::hidden()
-    } else {
-        ProgressBar::new(r.plan.steps)
-    };
-    bar.set_style(
-        ProgressStyle::with_template("{bar:40} {pos}/{len} steps  {per_sec}  ETA {eta}")
-            .unwrap_or_else(|_| ProgressStyle::default_bar()),
-    );
-    bar.set_position(r.simulation.step);
+    let report = progress::Progress::new(quiet, r.simulation.particles.len());
     pool.install(|| {
-        r.advance(dir, |done, _| {
-            if done % 64 == 0 {
-                bar.set_position(done);
+        r.advance(dir, |done, total| {
+            if done.is_multiple_of(64) || done == total {
+                report.update("run", done, total);
             }
         })
     })?;
-    bar.finish_and_clear();
+    report.finish();
     let last = r.rows.last();
     println!(
         "done: {} steps, t = {:.6e} s, {:.1} s wall{}; outputs in {}",

@@ -5,6 +5,7 @@ use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 use rheodem::domain::ShearDynamics;
 use rheodem::io::atomic::write_atomic;
+use rheodem::io::made_by::{self, Maker};
 use rheodem::run::RunError;
 use rheodem::setups::archive::{archive_point, archived, read_archive, refresh_table};
 use rheodem::setups::results_db::ResultsDb;
@@ -22,49 +23,49 @@ pub struct ShearBoxArgs {
     /// A TOML file with the point's keys (mu_p, inertial, softness, bond, cohesion, …).
     #[arg(long)]
     config: Option<PathBuf>,
-    /// Particle friction μ_p.
+    /// Particle friction μ_p, in [0, 10] (required).
     #[arg(long)]
     mu_p: Option<f64>,
-    /// Inertial number I.
+    /// Inertial number I, in (0, 2] (required).
     #[arg(long)]
     inertial: Option<f64>,
-    /// Softness p*.
+    /// Softness p*, in (0, 0.2] (required).
     #[arg(long)]
     softness: Option<f64>,
-    /// Bond number Bo.
+    /// Bond number Bo, in [0, 100] [default: 0].
     #[arg(long)]
     bond: Option<f64>,
-    /// Cohesion law: none, reversible, liquid_bridge, linear_irreversible.
+    /// Cohesion law: none, reversible, liquid_bridge, linear_irreversible [default: none].
     #[arg(long)]
     cohesion: Option<String>,
-    /// Rupture distance of the irreversible laws, S_c/d_p.
+    /// Rupture distance of the irreversible laws, S_c/d_p, in (0, 2] [default: 0.225].
     #[arg(long)]
     range: Option<f64>,
-    /// Mean diameter d_p (m).
+    /// Mean diameter d_p (m), > 0 [default: 0.0022].
     #[arg(long)]
     diameter: Option<f64>,
-    /// Density ρ_p (kg/m³).
+    /// Density ρ_p (kg/m³), > 0 [default: 2000].
     #[arg(long)]
     density: Option<f64>,
-    /// Normal stiffness k_n (N/m).
+    /// Normal stiffness k_n (N/m), > 0 [default: 100].
     #[arg(long)]
     stiffness: Option<f64>,
-    /// Restitution coefficient e.
+    /// Restitution coefficient e, in (0, 1] [default: 0.8].
     #[arg(long)]
     restitution: Option<f64>,
-    /// Polydispersity w = r_max/r_min.
+    /// Polydispersity w = r_max/r_min, in [1, 20] [default: 3].
     #[arg(long)]
     polydispersity: Option<f64>,
-    /// Number of particles N.
+    /// Number of particles N, in [16, 10⁷] [default: 4096].
     #[arg(long)]
     particles: Option<usize>,
-    /// Total shear strain.
+    /// Total shear strain, > 0 [default: 20].
     #[arg(long)]
     strain: Option<f64>,
-    /// Strain before averaging.
+    /// Strain before averaging, below the total strain [default: 5].
     #[arg(long)]
     transient_strain: Option<f64>,
-    /// Seed (0 to 2⁶³ − 1, the range a TOML file holds).
+    /// Seed (0 to 2⁶³ − 1, the range a TOML file holds) [default: 1].
     #[arg(long, value_parser = clap::value_parser!(u64).range(..=i64::MAX as u64))]
     seed: Option<u64>,
     /// Shear dynamics (docs/model.md §4.3–4.5): lab (the default), peculiar-contacts (lab
@@ -89,6 +90,10 @@ pub struct ShearBoxArgs {
     /// No progress bar.
     #[arg(long, short)]
     quiet: bool,
+    /// Start over even if the directory holds a run of other settings (otherwise the
+    /// same point resumes, and another is refused).
+    #[arg(long)]
+    force: bool,
 }
 
 fn spec_from(a: &ShearBoxArgs) -> Result<ShearBoxSpec> {
@@ -105,9 +110,10 @@ fn spec_from(a: &ShearBoxArgs) -> Result<ShearBoxSpec> {
         // The option replaces the older spelling of a config file.
         table.remove("peculiar_contacts");
     }
-    let mut set = |k: &str, v: Option<toml::Value>| {
+    let mut overrides: Vec<(&str, toml::Value)> = Vec::new();
+    let mut set = |k: &'static str, v: Option<toml::Value>| {
         if let Some(v) = v {
-            table.insert(k.to_string(), v);
+            overrides.push((k, v));
         }
     };
     let f = |x: Option<f64>| x.map(toml::Value::Float);
@@ -146,6 +152,21 @@ fn spec_from(a: &ShearBoxArgs) -> Result<ShearBoxSpec> {
         a.shear_dynamics
             .map(|d| toml::Value::String(d.name().into())),
     );
+    // The config file is valid on its own (an option overriding a bad value does not hide
+    // it): its values, completed by the options only where it has none.
+    if let Some(path) = &a.config {
+        let mut probe = table.clone();
+        for (k, v) in &overrides {
+            probe.entry(k.to_string()).or_insert_with(|| v.clone());
+        }
+        ShearBoxSpec::from_table(probe)
+            .map_err(anyhow::Error::from)
+            .and_then(|s| s.derive().map(|_| ()).map_err(anyhow::Error::from))
+            .with_context(|| format!("in {}", path.display()))?;
+    }
+    for (k, v) in overrides {
+        table.insert(k.to_string(), v);
+    }
     let spec =
         ShearBoxSpec::from_table(table).map_err(|e| anyhow::anyhow!("shear-box point: {e}"))?;
     spec.derive()?;
@@ -175,6 +196,22 @@ pub fn shear_box(a: ShearBoxArgs) -> Result<()> {
         .clone()
         .unwrap_or_else(|| PathBuf::from("runs/shear-box"));
     let (pool, n) = crate::pool(a.threads)?;
+    if a.force {
+        // Only files of a rheodem run are removed: the point then starts over.
+        if made_by::read(&dir).is_some() {
+            for f in ["checkpoint.bin", "steady_state.json"] {
+                match std::fs::remove_file(dir.join(f)) {
+                    Err(e) if e.kind() != std::io::ErrorKind::NotFound => {
+                        return Err(e)
+                            .with_context(|| format!("cannot remove {}", dir.join(f).display()));
+                    }
+                    _ => {}
+                }
+            }
+        }
+    } else {
+        made_by::expect(&dir, Maker::ShearBox).map_err(|e| anyhow::anyhow!("{e}"))?;
+    }
     if !a.quiet {
         eprintln!(
             "resolved: p = σ_yy target = {:.6e} Pa, γ̇ = {:.6e} 1/s, f_a^max = {:.6e} N, S_c = {:.4e} m, t_k = {:.4e} s, run {:.4e} s ({} strain)",
@@ -191,13 +228,20 @@ pub fn shear_box(a: ShearBoxArgs) -> Result<()> {
     let name = dir
         .file_name()
         .map_or("shear-box".into(), |s| s.to_string_lossy().into_owned());
-    let result = pool.install(|| {
-        run_point(&name, &spec, &dir, n, &mut |done, total| {
-            if done % 256 == 0 {
-                progress.set_position(done * 1000 / total.max(1));
-            }
+    let result = pool
+        .install(|| {
+            run_point(&name, &spec, &dir, n, &mut |done, total| {
+                if done % 256 == 0 {
+                    progress.set_position(done * 1000 / total.max(1));
+                }
+            })
         })
-    })?;
+        .map_err(|e| match e {
+            RunError::Mismatch(_) => {
+                anyhow::anyhow!("{e}; or pass --force to start it over with the new settings")
+            }
+            other => other.into(),
+        })?;
     progress.finish_and_clear();
     report(&result, &dir);
     Ok(())
@@ -262,8 +306,27 @@ pub(crate) fn sweep_dirs(spec: &SweepSpec, path: &Path) -> (PathBuf, Option<Path
     let out = spec
         .out
         .as_ref()
-        .map_or_else(|| default_out(path), |o| here.join(o));
-    (out, spec.results.as_ref().map(|r| here.join(r)))
+        .map_or_else(|| default_out(path), |o| beside(here, o));
+    (out, spec.results.as_ref().map(|r| beside(here, r)))
+}
+
+/// `here/relative` with `name/..` pairs removed (`studies/../runs` reads `runs`), for the
+/// paths a sweep or study file gives relative to itself.
+pub(crate) fn beside(here: &Path, relative: impl AsRef<Path>) -> PathBuf {
+    use std::path::Component;
+    let mut out = PathBuf::new();
+    for c in here.join(relative).components() {
+        match c {
+            Component::ParentDir
+                if matches!(out.components().next_back(), Some(Component::Normal(_))) =>
+            {
+                out.pop();
+            }
+            Component::CurDir => {}
+            other => out.push(other),
+        }
+    }
+    out
 }
 
 /// Runs the points of `spec` (read from `path`) that are not finished, storing each
@@ -582,4 +645,23 @@ pub fn db(cmd: DbCommand) -> Result<()> {
         }
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::beside;
+    use std::path::Path;
+
+    #[test]
+    fn paths_beside_a_file_drop_their_parent_steps() {
+        assert_eq!(
+            beside(Path::new("/w/studies"), "../runs/x"),
+            Path::new("/w/runs/x")
+        );
+        assert_eq!(
+            beside(Path::new("studies"), "./out"),
+            Path::new("studies/out")
+        );
+        assert_eq!(beside(Path::new(""), "../up"), Path::new("../up"));
+    }
 }

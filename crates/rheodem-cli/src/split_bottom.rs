@@ -1,9 +1,10 @@
 //! `rheodem split-bottom`: the split-bottom ring shear cell (fill, settle, shear).
 
+use crate::progress::Progress;
 use anyhow::{Context, Result, bail};
 use clap::Args;
-use indicatif::{ProgressBar, ProgressStyle};
 use rheodem::io::atomic::write_atomic;
+use rheodem::io::made_by::{self, Maker};
 use rheodem::setups::split_bottom::{
     Cohesion, SplitBottomRun, SplitBottomSpec, Stage, TimeStepRule,
 };
@@ -17,46 +18,54 @@ pub struct SplitBottomArgs {
     /// options override it.
     #[arg(long)]
     config: Option<PathBuf>,
-    /// Angular velocity Ω of the outer parts (rad/s).
+    /// Angular velocity Ω of the outer parts (rad/s), ≥ 0 [default: 0.5].
     #[arg(long)]
     omega: Option<f64>,
-    /// Gravity g (m/s²).
+    /// Gravity g (m/s²), ≥ 0 [default: 9.81].
     #[arg(long)]
     gravity: Option<f64>,
-    /// Adhesive law: dry, willett, linear.
+    /// Adhesive law: dry, willett, linear [default: dry].
     #[arg(long)]
     law: Option<String>,
-    /// Surface tension γ_s of the Willett law (N/m).
+    /// Surface tension γ_s of the Willett law (N/m), > 0 [default with --law willett: 0.02].
     #[arg(long)]
     surface_tension: Option<f64>,
-    /// Bridge volume V_b of the Willett law (nl = 1e-12 m³).
+    /// Bridge volume V_b of the Willett law (nl = 1e-12 m³), ≥ 0 (0: attraction only while
+    /// touching), with a rupture distance below the mean diameter [default with --law
+    /// willett: 75].
     #[arg(long)]
     volume_nl: Option<f64>,
-    /// f_a^max of the linear irreversible law (N).
+    /// f_a^max of the linear irreversible law (N), > 0 (required with --law linear).
     #[arg(long)]
     max_force: Option<f64>,
-    /// k_c of the linear irreversible law (N/m).
+    /// k_c of the linear irreversible law (N/m), > 0, with f_a^max/k_c below the mean
+    /// diameter (required with --law linear).
     #[arg(long)]
     adhesive_stiffness: Option<f64>,
-    /// Particle friction μ_p.
+    /// Particle friction μ_p, ≥ 0 [default: 0.01].
     #[arg(long)]
     mu_p: Option<f64>,
-    /// Shear duration (s).
+    /// Shear duration (s), > 0 [default: 4].
     #[arg(long)]
     duration: Option<f64>,
-    /// Start of the averaging window (s after the start of shear).
+    /// Start of the averaging window (s after the start of shear), in [0, duration)
+    /// [default: 2].
     #[arg(long)]
     average_from: Option<f64>,
-    /// Factor on the cell's lengths (not the particles).
+    /// Factor on the cell's lengths (not the particles), at least about 0.18 (two
+    /// diameters across each part; a small cell also needs a wider --wedge-deg) and within
+    /// the memory limit [default: 1].
     #[arg(long)]
     scale: Option<f64>,
-    /// Wedge angle Φ (degrees).
+    /// Wedge angle Φ (degrees), in (0, 180] and wide enough at the inner wall for a
+    /// particle not to reach its own image [default: 30].
     #[arg(long)]
     wedge_deg: Option<f64>,
-    /// Time-step rule: shortest (engine default) or mean-pair (the source papers' code).
+    /// Time-step rule: shortest (engine default) or mean-pair (the source papers' code)
+    /// [default: shortest].
     #[arg(long)]
     time_step: Option<String>,
-    /// Random seed of the filling.
+    /// Random seed of the filling [default: 1].
     #[arg(long)]
     seed: Option<u64>,
     /// Start shearing from the settled state of this earlier split-bottom run directory.
@@ -74,6 +83,10 @@ pub struct SplitBottomArgs {
     /// No progress bar.
     #[arg(long, short)]
     quiet: bool,
+    /// Refuse a cell whose estimated memory exceeds this size (e.g. 8GiB, 500MB; default:
+    /// the machine's physical memory).
+    #[arg(long, value_name = "SIZE")]
+    max_memory: Option<String>,
 }
 
 impl SplitBottomArgs {
@@ -98,6 +111,14 @@ impl SplitBottomArgs {
         set(&mut s.friction, self.mu_p);
         set(&mut s.duration, self.duration);
         set(&mut s.average_from, self.average_from);
+        if self.average_from.is_none() && s.average_from >= s.duration {
+            bail!(
+                "--duration {} ends before the averaging window starts (average_from = {} s, \
+                 the default unless --config sets it): give --average-from below the duration",
+                s.duration,
+                s.average_from
+            );
+        }
         set(&mut s.scale, self.scale);
         set(&mut s.wedge_deg, self.wedge_deg);
         if let Some(seed) = self.seed {
@@ -115,6 +136,29 @@ impl SplitBottomArgs {
             Cohesion::Willett { .. } => "willett",
             Cohesion::Linear { .. } => "linear",
         });
+        let stray = |given: &[(&str, bool)], needs: &str| -> Result<()> {
+            match given.iter().find(|(_, g)| *g) {
+                Some((flag, _)) if law != needs => bail!(
+                    "{flag} is an option of --law {needs}, but the law is {law}: add \
+                     --law {needs} or leave {flag} out"
+                ),
+                _ => Ok(()),
+            }
+        };
+        stray(
+            &[
+                ("--surface-tension", self.surface_tension.is_some()),
+                ("--volume-nl", self.volume_nl.is_some()),
+            ],
+            "willett",
+        )?;
+        stray(
+            &[
+                ("--max-force", self.max_force.is_some()),
+                ("--adhesive-stiffness", self.adhesive_stiffness.is_some()),
+            ],
+            "linear",
+        )?;
         s.cohesion = match law {
             "dry" => Cohesion::Dry,
             "willett" => {
@@ -157,29 +201,78 @@ impl SplitBottomArgs {
     }
 }
 
+/// The keys whose values differ between the spec of a run on disk (`old`) and the one
+/// asked for (`new`), as `key: old → new`.
+fn spec_changes(old: &SplitBottomSpec, new: &SplitBottomSpec) -> Vec<String> {
+    let table = |s: &SplitBottomSpec| match toml::Value::try_from(s) {
+        Ok(toml::Value::Table(t)) => t,
+        _ => toml::Table::new(),
+    };
+    let (a, b) = (table(old), table(new));
+    let mut keys: Vec<&String> = a.keys().chain(b.keys()).collect();
+    keys.sort();
+    keys.dedup();
+    keys.into_iter()
+        .filter(|k| a.get(*k) != b.get(*k))
+        .map(|k| {
+            let show = |t: &toml::Table| t.get(k).map_or("(none)".into(), |v| v.to_string());
+            format!("{k}: {} → {}", show(&a), show(&b))
+        })
+        .collect()
+}
+
+/// Checks the cell's estimated memory against `limit` before anything is allocated, and
+/// says what is coming (filling a large cell takes minutes).
+fn estimate(spec: &SplitBottomSpec, threads: usize, limit: Option<u64>, quiet: bool) -> Result<()> {
+    let (particles, bytes) = spec.memory_estimate(threads, limit)?;
+    if !quiet {
+        eprintln!(
+            "split-bottom: about {particles} particles, an estimated {} of memory",
+            rheodem::memory::Bytes(bytes)
+        );
+    }
+    Ok(())
+}
+
 /// Runs `rheodem split-bottom`.
 pub fn run(args: SplitBottomArgs) -> Result<()> {
     let spec = args.spec()?;
-    let (pool, _) = crate::pool(args.threads)?;
+    let limit = crate::memory_limit(args.max_memory.as_deref())?;
+    let (pool, threads) = crate::pool(args.threads)?;
     let dir = args
         .out
         .clone()
         .unwrap_or_else(|| Path::new("runs").join("split-bottom"));
+    if !args.force {
+        made_by::expect(&dir, Maker::SplitBottom).map_err(|e| anyhow::anyhow!("{e}"))?;
+    }
     let resumable = dir.join("checkpoint.bin").exists() && !args.force;
     let mut run = pool.install(|| -> Result<SplitBottomRun> {
         Ok(if resumable {
             let r = SplitBottomRun::resume(&dir)?;
-            if r.spec != spec && args.from.is_none() {
-                eprintln!(
-                    "note: {} holds a run with other settings; resuming it as it was \
-                     (use --force to start over)",
-                    dir.display()
+            let from = args.from.as_ref().map(|p| p.display().to_string());
+            let mut changed = spec_changes(&r.spec, &spec);
+            if r.from != from {
+                changed.push(format!(
+                    "--from: {} → {}",
+                    r.from.as_deref().unwrap_or("(none)"),
+                    from.as_deref().unwrap_or("(none)")
+                ));
+            }
+            if !changed.is_empty() {
+                bail!(
+                    "{} holds a split-bottom run with other settings ({}): run the same \
+                     command to resume it, pass --force to replace it, or choose another --out",
+                    dir.display(),
+                    changed.join("; ")
                 );
             }
             r
         } else if let Some(from) = &args.from {
+            estimate(&spec, threads, limit, args.quiet)?;
             SplitBottomRun::from_settled(spec, from, &dir, args.force)?
         } else {
+            estimate(&spec, threads, limit, args.quiet)?;
             SplitBottomRun::start(spec, &dir, args.force)?
         })
     })?;
@@ -192,32 +285,31 @@ pub fn run(args: SplitBottomArgs) -> Result<()> {
             dir.display()
         );
     }
-    let bar = if args.quiet {
-        ProgressBar::hidden()
-    } else {
-        ProgressBar::new(1)
+    let report = Progress::new(args.quiet, run.simulation.particles.len());
+    let mut progress = |stage: Stage, done: u64, total: u64| {
+        if done.is_multiple_of(64) || done == total {
+            let name = match stage {
+                Stage::Settle => "settle",
+                _ => "shear",
+            };
+            report.update(name, done, total);
+        }
     };
-    bar.set_style(
-        ProgressStyle::with_template("{msg:7} {bar:40} {pos}/{len} steps  {per_sec}  ETA {eta}")
-            .unwrap_or_else(|_| ProgressStyle::default_bar()),
-    );
-    pool.install(|| {
-        run.advance(&dir, |stage, done, total| {
-            if done % 64 == 0 || done == total {
-                let name = match stage {
-                    Stage::Settle => "settle",
-                    _ => "shear",
-                };
-                if bar.message() != name {
-                    bar.set_message(name);
-                    bar.reset();
-                }
-                bar.set_length(total);
-                bar.set_position(done);
-            }
-        })
-    })?;
-    bar.finish_and_clear();
+    // Stage by stage (a finished run only rewrites its outputs), with a warning when
+    // settling ended on its time limit.
+    loop {
+        let stage = run.stage;
+        pool.install(|| run.advance_stage(&dir, &mut progress))?;
+        if stage == Stage::Settle
+            && let Some(notice) = run.settled.as_ref().and_then(|r| r.limit_notice(&run.spec))
+        {
+            report.note(&format!("warning: {notice}"));
+        }
+        if run.stage == Stage::Done {
+            break;
+        }
+    }
+    report.finish();
     let res = run.results();
     let fmt = |e: &Option<rheodem::analysis::Estimate>| {
         e.map_or("n/a".to_string(), |e| {

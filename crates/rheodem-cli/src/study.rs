@@ -190,7 +190,10 @@ impl Loaded {
     /// The study's database file, if it has one.
     fn database(&self) -> Option<PathBuf> {
         let here = self.file.parent().unwrap_or(Path::new(""));
-        self.study.database.as_ref().map(|d| here.join(d))
+        self.study
+            .database
+            .as_ref()
+            .map(|d| crate::shear::beside(here, d))
     }
 
     /// The points' names, in order.

@@ -1,35 +1,11 @@
 //! Regression tests of the program's robustness defects (D1, D3, D6, D9 of the hostile-user
 //! review), end to end through the `rheodem` binary.
 
+mod common;
+
+use common::{rheodem_in, stderr, stdout, temp, workspace};
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
-
-fn rheodem_in(dir: &Path, args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_rheodem"))
-        .args(args)
-        .current_dir(dir)
-        .output()
-        .expect("the binary runs")
-}
-
-fn workspace() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
-}
-
-fn temp(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("rheodem-robust-cli-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).expect("temp dir");
-    d
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
-
-fn stdout(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stdout).into_owned()
-}
+use std::process::Command;
 
 /// A sweep of `n` tiny dry points (150 spheres, 0.3 strain units) with paths relative to
 /// the file.
@@ -84,7 +60,7 @@ fn d3_thread_and_job_counts_are_bounded() {
             "{args:?}: {err}"
         );
     }
-    let dir = temp("d3");
+    let dir = temp("robust-cli", "d3");
     let sweep = tiny_sweep(&dir, &[0.05]);
     for jobs in ["0", "100000"] {
         let out = rheodem_in(&ws, &["sweep", &sweep.to_string_lossy(), "--jobs", jobs]);
@@ -99,7 +75,7 @@ fn d3_thread_and_job_counts_are_bounded() {
 /// work, and a later sweep collects every point.
 #[test]
 fn d6_two_concurrent_sweeps_share_the_points() {
-    let dir = temp("d6");
+    let dir = temp("robust-cli", "d6");
     let sweep = tiny_sweep(&dir, &[0.05, 0.08, 0.1, 0.12]);
     let file = sweep.to_string_lossy().into_owned();
     let spawn = || {
@@ -149,10 +125,10 @@ fn walk(dir: &Path) -> Vec<PathBuf> {
 /// same sweep started elsewhere reran every point; they are relative to the file.
 #[test]
 fn d9_sweep_paths_are_relative_to_the_sweep_file() {
-    let dir = temp("d9-paths");
+    let dir = temp("robust-cli", "d9-paths");
     let sweep = tiny_sweep(&dir, &[0.05]);
     let file = sweep.to_string_lossy().into_owned();
-    let elsewhere = temp("d9-elsewhere");
+    let elsewhere = temp("robust-cli", "d9-elsewhere");
     let first = rheodem_in(&elsewhere, &["sweep", &file, "--quiet"]);
     assert!(first.status.success(), "{}", stderr(&first));
     assert!(dir.join("archive/results.csv").exists());
@@ -179,7 +155,7 @@ fn d9_sweep_paths_are_relative_to_the_sweep_file() {
 /// directories "checkpointed" sweep points.
 #[test]
 fn d9_compare_refuses_a_directory_without_a_sweep() {
-    let empty = temp("d9-empty");
+    let empty = temp("robust-cli", "d9-empty");
     let out = rheodem_in(&workspace(), &["compare", &empty.to_string_lossy()]);
     assert!(!out.status.success());
     assert!(
@@ -189,7 +165,7 @@ fn d9_compare_refuses_a_directory_without_a_sweep() {
     );
 
     // A directory of plain runs (as `rheodem run` writes them) is no sweep either.
-    let runs = temp("d9-runs");
+    let runs = temp("robust-cli", "d9-runs");
     let scenario = runs.join("gas.toml");
     std::fs::write(&scenario, GAS).expect("scenario");
     let one = runs.join("one");
@@ -244,7 +220,7 @@ checkpoints = 3
 /// "already complete" and left it so; it now repairs the summary.
 #[test]
 fn d1_resume_repairs_the_summary_of_a_complete_run() {
-    let dir = temp("d1");
+    let dir = temp("robust-cli", "d1");
     std::fs::write(dir.join("gas.toml"), GAS).expect("scenario");
     let out = rheodem_in(
         &dir,
@@ -274,7 +250,7 @@ fn d1_resume_repairs_the_summary_of_a_complete_run() {
 /// preparation's dynamics.
 #[test]
 fn check_describes_the_preparation_without_running_it() {
-    let dir = temp("check");
+    let dir = temp("robust-cli", "check");
     let scenario = GAS.replace("[run]", "[preparation]\nvolume_fraction = 0.1\n[run]");
     std::fs::write(dir.join("gas.toml"), scenario).expect("scenario");
     let out = rheodem_in(&dir, &["check", "gas.toml"]);

@@ -1,33 +1,15 @@
 //! `rheodem split-bottom` through the binary: bad options and configs get clear errors,
 //! and a small cell runs end to end from a config file, then again from its settled state.
 
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+mod common;
 
-fn rheodem_in(dir: &Path, args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_rheodem"))
-        .args(args)
-        .current_dir(dir)
-        .output()
-        .expect("the binary runs")
-}
-
-fn temp(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("rheodem-sb-cli-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).expect("temp dir");
-    d
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
+use common::{rheodem_in, stderr, temp};
 
 /// Each bad input fails with a message naming the key (or option) and what is allowed,
 /// before any run directory is created.
 #[test]
 fn bad_input_is_refused_with_the_key_named() {
-    let dir = temp("bad");
+    let dir = temp("sb-cli", "bad");
     std::fs::write(dir.join("typo.toml"), "omgea = 1.0\n").expect("write");
     std::fs::write(dir.join("narrow.toml"), "wedge_deg = 4.0\n").expect("write");
     let cases: [(&[&str], &str); 5] = [
@@ -61,7 +43,7 @@ fn bad_input_is_refused_with_the_key_named() {
 /// second run starts from its settled state with another Ω.
 #[test]
 fn small_cell_from_a_config_and_from_its_settled_state() {
-    let dir = temp("small");
+    let dir = temp("sb-cli", "small");
     std::fs::write(
         dir.join("small.toml"),
         "inner_radius = 0.02\nouter_radius = 0.05\nsplit_radius = 0.035\nheight = 0.012\n\

@@ -62,6 +62,7 @@ pub mod generate;
 pub mod integrate;
 pub mod io;
 pub mod measure;
+pub mod memory;
 pub mod neighbor;
 pub mod observe;
 pub mod particles;

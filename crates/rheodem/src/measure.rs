@@ -34,6 +34,11 @@ pub struct ContactSums {
     /// The deepest contact (largest overlap over the smaller radius).
     #[serde(default)]
     pub deepest: DeepestContact,
+    /// Energy of the contact springs alone (J, ≥ 0): the repulsive part of
+    /// `elastic_energy`, without the (negative) adhesive potential; equal to it without
+    /// adhesion.
+    #[serde(default)]
+    pub spring_energy: f64,
 }
 
 impl Default for ContactSums {
@@ -46,6 +51,7 @@ impl Default for ContactSums {
             sliding: 0,
             attracting_apart: 0,
             deepest: DeepestContact::default(),
+            spring_energy: 0.0,
         }
     }
 }
@@ -59,23 +65,25 @@ impl ContactSums {
         self.sliding += o.sliding;
         self.attracting_apart += o.attracting_apart;
         self.deepest.merge(&o.deepest);
+        self.spring_energy += o.spring_energy;
     }
 
-    /// Adds one interacting pair: force `pf` on `i`, kinematics `k`, stored energy
-    /// `energy` (J), branch vector `branch = r_i − r_j` (m) and the partners' ids (a
-    /// particle id and a wall index if `wall`).
+    /// Adds one interacting pair: force `pf` on `i`, kinematics `k`, stored energies
+    /// `(elastic, springs)` (J; see the fields), branch vector `branch = r_i − r_j` (m) and
+    /// the partners' ids (a particle id and a wall index if `wall`).
     #[inline]
     pub fn add_pair(
         &mut self,
         pf: &PairForce,
         k: &PairKinematics,
-        energy: f64,
+        energy: (f64, f64),
         branch: DVec3,
         pair: [u32; 2],
         wall: bool,
     ) {
         self.stress_sum += outer(pf.force, branch);
-        self.elastic_energy += energy;
+        self.elastic_energy += energy.0;
+        self.spring_energy += energy.1;
         if k.overlap > 0.0 {
             self.contacts += 1;
             self.sliding += u64::from(pf.sliding);
@@ -95,10 +103,15 @@ impl ContactObserver for ContactSums {
     #[inline]
     fn visit(&mut self, c: &ContactView<'_>) {
         let pair = [c.ids[0], c.ids[1]];
+        let k = c.kinematics;
+        let springs = c.spring_energy();
+        let elastic = springs
+            + c.kernel
+                .adhesive_potential(k.overlap, k.radius_i, k.radius_j, c.history.bridge);
         self.add_pair(
             c.force,
             c.kinematics,
-            c.elastic_energy(),
+            (elastic, springs),
             c.branch,
             pair,
             c.wall.is_some(),
@@ -115,6 +128,8 @@ impl ContactObserver for ContactSums {
 pub struct ContactSummary {
     /// Elastic energy stored in contacts (J).
     pub elastic_energy: f64,
+    /// Energy of the contact springs alone (J), without the adhesive potential.
+    pub spring_energy: f64,
     /// Contacts with `δ > 0` (particle pairs and wall contacts).
     pub contacts: u64,
     /// Fraction of contacts that slide.

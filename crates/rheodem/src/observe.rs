@@ -68,6 +68,12 @@ impl ContactView<'_> {
         self.kernel
             .elastic_energy(k.overlap, k.radius_i, k.radius_j, self.history)
     }
+
+    /// Energy stored in the pair's springs alone (J, ≥ 0), without the adhesive potential.
+    pub fn spring_energy(&self) -> f64 {
+        self.kernel
+            .spring_energy(self.kinematics.overlap, self.history)
+    }
 }
 
 /// What a force evaluation gathers from its contacts.

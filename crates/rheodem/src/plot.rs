@@ -5,6 +5,7 @@ use plotters::prelude::*;
 use std::sync::Once;
 
 mod heat_map;
+pub mod rich;
 pub use heat_map::HeatMap;
 
 /// One named curve: `(x, y)` points joined by lines.
@@ -117,6 +118,142 @@ fn encode_png(rgb: &[u8], size: (u32, u32)) -> Result<Vec<u8>, String> {
     Ok(png)
 }
 
+/// Space above the plot for its title (pixels).
+const TITLE_SPACE: u32 = 45;
+
+/// A tick value as a reader writes it: no trailing zeros (`20`, not `20.0`), no negative
+/// zero, and powers of ten for very large or small magnitudes.
+pub fn tick_label(v: f64) -> String {
+    let a = v.abs();
+    if a < 1e-12 * 1e3f64.max(a) || a == 0.0 {
+        return "0".into();
+    }
+    let trim = |t: String| {
+        if t.contains('.') {
+            t.trim_end_matches('0').trim_end_matches('.').to_string()
+        } else {
+            t
+        }
+    };
+    if !(1e-3..1e5).contains(&a) {
+        let t = format!("{v:.3e}");
+        let (mantissa, exponent) = t.split_once('e').unwrap_or((&t, "0"));
+        return format!("{}e{exponent}", trim(mantissa.to_string()));
+    }
+    // Six significant digits, then the zeros trimmed.
+    let decimals = (5 - a.log10().floor() as i32).clamp(0, 9) as usize;
+    let t = trim(format!("{v:.decimals$}"));
+    if t == "-0" { "0".into() } else { t }
+}
+
+/// What a legend entry shows beside its label.
+#[derive(Clone, Copy)]
+pub(crate) enum LegendMark {
+    /// A line in this colour, dashed or solid.
+    Line(RGBAColor, bool),
+    /// A dot in this colour.
+    Dot(RGBAColor),
+}
+
+/// The title above the plot and the axis labels beside the plotting area (pixel ranges
+/// `area`), with subscripts and superscripts ([`rich`]).
+pub(crate) fn draw_labels<DB: DrawingBackend>(
+    root: &DrawingArea<DB, plotters::coord::Shift>,
+    labels: &Labels<'_>,
+    area: (std::ops::Range<i32>, std::ops::Range<i32>),
+) -> Result<(), DrawingAreaErrorKind<DB::ErrorType>> {
+    let (w, h) = root.dim_in_pixel();
+    let (xs, ys) = area;
+    let centre = (w as i32 / 2, (TITLE_SPACE / 2) as i32);
+    rich::draw(
+        root,
+        labels.title,
+        centre,
+        20.0,
+        &BLACK,
+        rich::Align::Centre,
+        false,
+    )?;
+    let below = ((xs.start + xs.end) / 2, h as i32 - 14);
+    rich::draw(
+        root,
+        labels.x,
+        below,
+        15.0,
+        &BLACK,
+        rich::Align::Centre,
+        false,
+    )?;
+    let left = (16, (ys.start + ys.end) / 2);
+    rich::draw(
+        root,
+        labels.y,
+        left,
+        15.0,
+        &BLACK,
+        rich::Align::Centre,
+        true,
+    )
+}
+
+/// The legend in the upper right corner (`corner`, pixels) of the plotting area, or in the
+/// upper left (`corner` then that corner) when `from_left`.
+pub(crate) fn draw_legend<DB: DrawingBackend>(
+    root: &DrawingArea<DB, plotters::coord::Shift>,
+    entries: &[(&str, LegendMark)],
+    corner: (i32, i32),
+    from_left: bool,
+) -> Result<(), DrawingAreaErrorKind<DB::ErrorType>> {
+    if entries.is_empty() {
+        return Ok(());
+    }
+    const SIZE: f64 = 13.0;
+    const ROW: i32 = 22;
+    let text = entries
+        .iter()
+        .map(|(l, _)| rich::width(root, l, SIZE) as i32)
+        .max()
+        .unwrap_or(0);
+    let (w, h) = (text + 50, ROW * entries.len() as i32 + 10);
+    let x0 = if from_left {
+        corner.0 + 10
+    } else {
+        corner.0 - w - 10
+    };
+    let y0 = corner.1 + 10;
+    root.draw(&Rectangle::new(
+        [(x0, y0), (x0 + w, y0 + h)],
+        WHITE.mix(0.85).filled(),
+    ))?;
+    root.draw(&Rectangle::new([(x0, y0), (x0 + w, y0 + h)], BLACK))?;
+    for (k, (label, mark)) in entries.iter().enumerate() {
+        let y = y0 + 5 + ROW * k as i32 + ROW / 2;
+        match *mark {
+            LegendMark::Line(c, false) => root.draw(&PathElement::new(
+                vec![(x0 + 8, y), (x0 + 32, y)],
+                c.stroke_width(2),
+            ))?,
+            LegendMark::Line(c, true) => root.draw(&plotters::element::DashedPathElement::new(
+                vec![(x0 + 8, y), (x0 + 32, y)],
+                5,
+                3,
+                c.stroke_width(2),
+            ))?,
+            LegendMark::Dot(c) => root.draw(&Circle::new((x0 + 20, y), 4, c.filled()))?,
+        }
+        rich::draw(
+            root,
+            label,
+            (x0 + 40, y - 8),
+            SIZE,
+            &BLACK,
+            rich::Align::Left,
+            false,
+        )?;
+    }
+    Ok(())
+}
+
 /// Draws the plot of [`plot_svg`] on any backend.
 fn draw_plot<DB: DrawingBackend>(
     root: &DrawingArea<DB, plotters::coord::Shift>,
@@ -165,19 +302,20 @@ fn draw_plot<DB: DrawingBackend>(
     let y1 = y1 + (y1 - y0) * (0.08 * entries).min(0.6);
     root.fill(&WHITE).map_err(err)?;
     let mut chart = ChartBuilder::on(root)
-        .caption(labels.title, ("sans-serif", 20))
         .margin(15)
-        .x_label_area_size(45)
-        .y_label_area_size(80)
+        .margin_top(TITLE_SPACE)
+        .x_label_area_size(55)
+        .y_label_area_size(95)
         .build_cartesian_2d(x0..x1, y0..y1)
         .map_err(err)?;
     chart
         .configure_mesh()
-        .x_desc(labels.x)
-        .y_desc(labels.y)
+        .x_label_formatter(&|v| tick_label(*v))
+        .y_label_formatter(&|v| tick_label(*v))
         .label_style(("sans-serif", 13))
         .draw()
         .map_err(err)?;
+    let mut legend: Vec<(&str, LegendMark)> = Vec::new();
     // A curve without points is left out, keeping its colour for its markers.
     for (k, s) in series
         .iter()
@@ -189,22 +327,12 @@ fn draw_plot<DB: DrawingBackend>(
         match s.dashed_as {
             None => chart
                 .draw_series(LineSeries::new(s.points.iter().copied(), style))
-                .map_err(err)?
-                .label(s.label)
-                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], style)),
+                .map_err(err)?,
             Some(_) => chart
                 .draw_series(DashedLineSeries::new(s.points.iter().copied(), 8, 5, style))
-                .map_err(err)?
-                .label(s.label)
-                .legend(move |(x, y)| {
-                    plotters::element::DashedPathElement::new(
-                        vec![(x, y), (x + 20, y)],
-                        5,
-                        3,
-                        style,
-                    )
-                }),
+                .map_err(err)?,
         };
+        legend.push((s.label, LegendMark::Line(color, s.dashed_as.is_some())));
     }
     for (k, m) in markers
         .iter()
@@ -223,18 +351,12 @@ fn draw_plot<DB: DrawingBackend>(
                     .iter()
                     .map(|&(x, y, _)| Circle::new((x, y), 4, color.filled())),
             )
-            .map_err(err)?
-            .label(m.label)
-            .legend(move |(x, y)| Circle::new((x + 10, y), 4, color.filled()));
+            .map_err(err)?;
+        legend.push((m.label, LegendMark::Dot(color)));
     }
-    chart
-        .configure_series_labels()
-        .position(SeriesLabelPosition::UpperRight)
-        .background_style(WHITE.mix(0.8))
-        .border_style(BLACK)
-        .label_font(("sans-serif", 13))
-        .draw()
-        .map_err(err)?;
+    let (xs, ys) = chart.plotting_area().get_pixel_range();
+    draw_labels(root, labels, (xs.clone(), ys.clone())).map_err(err)?;
+    draw_legend(root, &legend, (xs.end, ys.start), false).map_err(err)?;
     root.present().map_err(err)?;
     Ok(())
 }

@@ -18,6 +18,7 @@ use crate::Simulation;
 use crate::cg::{self, ContactRecords, periodic::BoxFields};
 use crate::io::atomic::write_atomic;
 use crate::io::lock::{DirLock, LockError};
+use crate::io::made_by::{self, Maker};
 use crate::io::{timeseries, vtk};
 use crate::measure::Observables;
 use crate::neighbor::NeighborError;
@@ -214,7 +215,13 @@ pub fn io_err<'a>(
 pub fn lock(dir: &Path) -> Result<Arc<DirLock>, RunError> {
     std::fs::create_dir_all(dir).map_err(io_err("create the directory", dir))?;
     match DirLock::try_acquire(dir) {
-        Ok(l) => Ok(Arc::new(l)),
+        Ok(l) => {
+            // With the lock held, no other writer is left: a temporary here was left by a
+            // killed one.
+            crate::io::atomic::remove_stale_temporaries(dir)
+                .map_err(io_err("remove stale temporaries in", dir))?;
+            Ok(Arc::new(l))
+        }
         Err(LockError::Busy(d)) => Err(RunError::Busy(d)),
         Err(LockError::Io { path, source }) => Err(RunError::Io {
             operation: "lock",
@@ -320,6 +327,10 @@ impl Run {
         if dir.join("checkpoint.bin").exists() && !force {
             return Err(RunError::Exists(dir.to_path_buf()));
         }
+        // Marked before the preparation, so that a directory killed during it says what it
+        // is.
+        let marker = dir.join(made_by::FILE);
+        made_by::mark(dir, Maker::Run).map_err(io_err("write", &marker))?;
         let built = match build(&scenario, base_dir) {
             Ok(b) => b,
             Err(e) => {

@@ -399,6 +399,7 @@ impl Simulation {
         let free = self.particles.free_count().max(1) as f64;
         ContactSummary {
             elastic_energy: sums.elastic_energy,
+            spring_energy: sums.spring_energy,
             contacts: sums.contacts,
             sliding_fraction: if sums.contacts > 0 {
                 sums.sliding as f64 / sums.contacts as f64

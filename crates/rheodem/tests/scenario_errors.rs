@@ -164,7 +164,7 @@ fn malformed_scenarios_name_the_key_and_range() {
         (
             "wrong type",
             ("count = 50", "count = \"many\""),
-            &["particles[0]", "\"many\"", "expected usize"],
+            &["particles[0].count", "\"many\"", "whole number"],
         ),
         (
             "preparation target out of range",
@@ -214,12 +214,12 @@ fn malformed_scenarios_name_the_key_and_range() {
             &["contact[0].adhesion.contact_angle_deg", "[0, 90)"],
         ),
         (
-            "zero bridge volume",
+            "negative bridge volume (0 is the contact-only limit)",
             (
                 "mu = 0.5 }",
-                "mu = 0.5 }\nadhesion = { law = \"liquid_bridge\", surface_tension = 0.02, contact_angle_deg = 20.0, volume = 0.0 }",
+                "mu = 0.5 }\nadhesion = { law = \"liquid_bridge\", surface_tension = 0.02, contact_angle_deg = 20.0, volume = -1e-12 }",
             ),
-            &["contact[0].adhesion.volume", "rupture distance"],
+            &["contact[0].adhesion.volume", "zero or positive"],
         ),
         (
             "adhesion without stiffness or range",

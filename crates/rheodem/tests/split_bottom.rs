@@ -389,3 +389,54 @@ fn small_wet_cell_fields_on_the_fly_equal_offline() {
     assert!(deep.velocity[1].is_finite() && deep.strain_rate.is_finite());
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// R1 (second audit): a wet cell settles on its kinetic criterion like a dry one. The
+/// criterion compares the translational kinetic energy with the energy of the contact
+/// springs; the elastic energy, which holds the bridges' negative potential, can fall below
+/// zero in a wet bed, and a test against it never passed (settling ran to its time limit).
+#[test]
+fn r1_wet_cells_finish_settling() {
+    use rheodem::setups::split_bottom::Cohesion;
+    let dir = tmp("r1-wet");
+    let mut spec = small();
+    spec.cohesion = Cohesion::Willett {
+        surface_tension: 0.02,
+        volume: 75e-12,
+        contact_angle_deg: 20.0,
+    };
+    spec.settle_max_time = 1.0;
+    let mut run = SplitBottomRun::start(spec.clone(), &dir, false).expect("start");
+    run.advance_stage(&dir, &mut |_, _, _| {}).expect("settle");
+    assert_eq!(run.stage, Stage::Shear);
+    let settled = run.settled.clone().expect("settled");
+    assert!(settled.criterion_met, "{settled:?}");
+    assert!(settled.time < spec.settle_max_time, "{settled:?}");
+    assert!(settled.limit_notice(&spec).is_none());
+    // The bridges' potential is negative: the springs hold more than the elastic total.
+    let c = run.simulation.contact_summary();
+    assert!(
+        c.spring_energy > 0.0 && c.elastic_energy < c.spring_energy,
+        "{c:?}"
+    );
+    // A report at the limit names the keys to change.
+    let late = rheodem::setups::split_bottom::SettleReport {
+        criterion_met: false,
+        ..settled
+    };
+    let notice = late.limit_notice(&spec).expect("a notice at the limit");
+    assert!(notice.contains("settle_max_time") && notice.contains("settle_damping"));
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+/// Without adhesion the springs' energy is the elastic energy, bit for bit, so that the
+/// settle criterion of a dry cell (and every settled state made before it) is unchanged.
+#[test]
+fn dry_spring_energy_is_the_elastic_energy() {
+    let dir = tmp("dry-springs");
+    let mut run = SplitBottomRun::start(small(), &dir, false).expect("start");
+    run.advance_stage(&dir, &mut |_, _, _| {}).expect("settle");
+    let c = run.simulation.contact_summary();
+    assert!(c.elastic_energy > 0.0);
+    assert_eq!(c.spring_energy.to_bits(), c.elastic_energy.to_bits());
+    std::fs::remove_dir_all(&dir).ok();
+}

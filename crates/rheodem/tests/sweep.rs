@@ -130,7 +130,7 @@ fn figures_show_the_points_that_belong_to_them() {
     let figures = rheodem::setups::compare::comparison_figures(std::slice::from_ref(finished()))
         .expect("figures");
     let names: Vec<&str> = figures.iter().map(|f| f.name.as_str()).collect();
-    assert_eq!(names, ["phi_vs_inertial", "mu_vs_inertial"]);
+    assert_eq!(names, ["phi-vs-inertial", "mu-vs-inertial"]);
     for f in &figures {
         let name = &f.name;
         assert!(f.svg.starts_with("<svg"), "{name}");

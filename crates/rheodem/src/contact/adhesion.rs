@@ -182,7 +182,9 @@ impl Adhesion {
             } => ResolvedAdhesion::LiquidBridge {
                 force_per_radius: 2.0 * PI * surface_tension * contact_angle.cos(),
                 range,
-                inv_volume: 1.0 / volume,
+                // `V_b = 0` is the contact-only limit: no range, so the only separation at
+                // which the law is evaluated apart is `S = 0`, where `S̄ = 0`.
+                inv_volume: if volume > 0.0 { 1.0 / volume } else { 0.0 },
             },
         }
     }
@@ -451,6 +453,41 @@ mod tests {
                 "from {from} of the range: {quad} vs {closed}"
             );
         }
+    }
+
+    /// `V_b = 0`: Willett's contact-only limit (Roy et al. 2016, Sect. 3.1, the finite
+    /// cohesion `c*₀` of a vanishing bridge): `−f_max` while touching, nothing once apart,
+    /// and the limit of the law as `V_b → 0` at every separation.
+    #[test]
+    fn willett_zero_volume_attracts_only_in_contact() {
+        let zero = Adhesion::LiquidBridge {
+            surface_tension: 0.02,
+            contact_angle: 20f64.to_radians(),
+            volume: 0.0,
+        };
+        let (a_i, a_j) = (A, 0.7 * A);
+        let r = 2.0 * a_i * a_j / (a_i + a_j);
+        let f_max = 2.0 * PI * 0.02 * 20f64.to_radians().cos() * r;
+        assert_eq!(zero.range(), 0.0);
+        assert!((zero.contact_force(a_i, a_j) + f_max).abs() < 1e-15 * f_max);
+        // At contact the bridge pulls with f_max; any gap breaks it.
+        let (f0, alive0) = zero.separated_force(0.0, a_i, a_j, true);
+        assert!(alive0 && (f0 + f_max).abs() < 1e-15 * f_max, "{f0}");
+        for s in [1e-12, 1e-6, 1e-3] {
+            assert_eq!(zero.separated_force(s, a_i, a_j, true), (0.0, false));
+        }
+        // Energy: −f_max δ in contact, zero apart.
+        assert_eq!(zero.potential(-1e-6, a_i, a_j, true), 0.0);
+        let delta = 1e-5;
+        assert!((zero.potential(delta, a_i, a_j, true) + f_max * delta).abs() < 1e-18);
+        // The limit: a tiny volume's force at a fixed gap vanishes, its contact force not.
+        let tiny = Adhesion::LiquidBridge {
+            surface_tension: 0.02,
+            contact_angle: 20f64.to_radians(),
+            volume: 1e-30,
+        };
+        assert_eq!(tiny.separated_force(1e-6, a_i, a_j, true).0, 0.0);
+        assert_eq!(tiny.contact_force(a_i, a_j), zero.contact_force(a_i, a_j));
     }
 
     #[test]

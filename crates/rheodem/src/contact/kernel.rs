@@ -160,15 +160,28 @@ impl PairKernel {
     /// the springs' `½ k x²` while touching, plus the adhesive potential. See
     /// [`ContactLaw::elastic_energy`].
     pub fn elastic_energy(&self, overlap: f64, a_i: f64, a_j: f64, h: &ContactHistory) -> f64 {
-        let springs = if overlap > 0.0 {
+        self.spring_energy(overlap, h) + self.adhesive_potential(overlap, a_i, a_j, h.bridge)
+    }
+
+    /// The adhesive potential (J, ≤ 0) of the pair at overlap `δ` (m) for radii `a_i`,
+    /// `a_j` (m) and bridge flag `bridge`: the part of [`PairKernel::elastic_energy`] that
+    /// is not in the springs.
+    pub fn adhesive_potential(&self, overlap: f64, a_i: f64, a_j: f64, bridge: bool) -> f64 {
+        self.adhesion.potential(overlap, a_i, a_j, bridge)
+    }
+
+    /// Energy (J, ≥ 0) of the pair's springs alone at overlap `δ` (m) with history `h`:
+    /// `½ k_n δ² + ½ k_t |ξ_t|² + ½ k_r |ξ_r|² + ½ k_o |ξ_o|²` while touching, zero apart —
+    /// the repulsive part of [`PairKernel::elastic_energy`], without the adhesive potential.
+    pub fn spring_energy(&self, overlap: f64, h: &ContactHistory) -> f64 {
+        if overlap > 0.0 {
             0.5 * (self.stiffness * overlap * overlap
                 + self.tangential.stiffness * h.tangential.length_squared()
                 + self.rolling.stiffness * h.rolling.length_squared()
                 + self.torsion.stiffness * h.torsion.length_squared())
         } else {
             0.0
-        };
-        springs + self.adhesion.potential(overlap, a_i, a_j, h.bridge)
+        }
     }
 
     /// Whether a bridge forms at contact (irreversible adhesive laws).

@@ -3,6 +3,7 @@
 
 pub mod atomic;
 pub mod lock;
+pub mod made_by;
 pub mod packing;
 pub mod text;
 pub mod timeseries;

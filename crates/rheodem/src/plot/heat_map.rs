@@ -1,7 +1,10 @@
 //! Heat maps of a field on a regular 2-D grid, with curves drawn over them and a colour bar,
 //! rendered to SVG or PNG with the bundled font.
 
-use super::{Series, colour as curve_colour, register_font};
+use super::{
+    Labels, LegendMark, Series, TITLE_SPACE, colour as curve_colour, draw_labels, draw_legend,
+    register_font, rich, tick_label,
+};
 use plotters::coord::Shift;
 use plotters::prelude::*;
 
@@ -120,20 +123,27 @@ impl HeatMap<'_> {
             ViridisRGB::get_color(t)
         };
         let mut chart = ChartBuilder::on(&map_area)
-            .caption(self.title, ("sans-serif", 20))
             .margin(15)
-            .x_label_area_size(45)
-            .y_label_area_size(75)
+            .margin_top(TITLE_SPACE)
+            .x_label_area_size(55)
+            .y_label_area_size(85)
             .build_cartesian_2d(x0..x1, y0..y1)
             .map_err(err)?;
         chart
             .configure_mesh()
             .disable_mesh()
-            .x_desc(self.x)
-            .y_desc(self.y)
+            .x_label_formatter(&|v| tick_label(*v))
+            .y_label_formatter(&|v| tick_label(*v))
             .label_style(("sans-serif", 13))
             .draw()
             .map_err(err)?;
+        let (xs, ys) = chart.plotting_area().get_pixel_range();
+        let labels = Labels {
+            title: self.title,
+            x: self.x,
+            y: self.y,
+        };
+        draw_labels(&map_area, &labels, (xs.clone(), ys.clone())).map_err(err)?;
         let nx = self.xs.len();
         let cells = self
             .values
@@ -145,6 +155,7 @@ impl HeatMap<'_> {
                 Rectangle::new([(x - hx, y - hy), (x + hx, y + hy)], colour(v).filled())
             });
         chart.draw_series(cells).map_err(err)?;
+        let mut legend = Vec::new();
         for (k, s) in self.overlays.iter().enumerate() {
             let line = if k == 0 {
                 BLACK.to_rgba()
@@ -156,42 +167,72 @@ impl HeatMap<'_> {
                 .points
                 .split(|p| !(p.0.is_finite() && p.1.is_finite()))
                 .filter(|piece| piece.len() >= 2);
-            for (n, piece) in pieces.enumerate() {
-                let drawn = chart
+            for piece in pieces {
+                chart
                     .draw_series(LineSeries::new(piece.iter().copied(), line.stroke_width(2)))
                     .map_err(err)?;
-                if n == 0 {
-                    drawn.label(s.label).legend(move |(x, y)| {
-                        PathElement::new(vec![(x, y), (x + 20, y)], line.stroke_width(2))
-                    });
-                }
             }
+            legend.push((s.label, LegendMark::Line(line, false)));
         }
-        if !self.overlays.is_empty() {
-            chart
-                .configure_series_labels()
-                .position(SeriesLabelPosition::UpperLeft)
-                .background_style(WHITE.mix(0.8))
-                .border_style(BLACK)
-                .label_font(("sans-serif", 13))
-                .draw()
-                .map_err(err)?;
-        }
+        draw_legend(&map_area, &legend, (xs.start, ys.start), true).map_err(err)?;
+        // The bar: tick labels on its left, its label close on its right, and a note at
+        // an end whose values saturate (the scale spans the inner quantiles).
         let mut bar = ChartBuilder::on(&bar_area)
-            .margin_top(50)
-            .margin_bottom(60)
-            .margin_right(15)
-            .y_label_area_size(85)
+            .margin_top(TITLE_SPACE + 15)
+            .margin_bottom(70)
+            .margin_right(40)
+            .y_label_area_size(60)
             .build_cartesian_2d(0.0..1.0, lo..hi)
             .map_err(err)?;
         bar.configure_mesh()
             .disable_mesh()
             .disable_x_axis()
-            .y_desc(self.value)
             .y_labels(8)
+            .y_label_formatter(&|v| tick_label(*v))
             .label_style(("sans-serif", 12))
             .draw()
             .map_err(err)?;
+        // Pixel ranges are the backend's; the bar area's own coordinates start at its base.
+        let (bx, by) = bar.plotting_area().get_pixel_range();
+        let (base_x, base_y) = bar_area.get_base_pixel();
+        let (bx, by) = (
+            bx.start - base_x..bx.end - base_x,
+            by.start - base_y..by.end - base_y,
+        );
+        let (bw, _) = bar_area.dim_in_pixel();
+        rich::draw(
+            &bar_area,
+            self.value,
+            (bx.end + 16, (by.start + by.end) / 2),
+            14.0,
+            &BLACK,
+            rich::Align::Centre,
+            true,
+        )
+        .map_err(err)?;
+        let beyond = |above: bool| {
+            self.values
+                .iter()
+                .any(|&v| v.is_finite() && if above { v > hi } else { v < lo })
+        };
+        let short = |v: f64| tick_label(format!("{v:.3e}").parse().unwrap_or(v));
+        for (above, y, text) in [
+            (true, by.start - 22, format!("≥ {} saturate", short(hi))),
+            (false, by.end + 8, format!("≤ {} saturate", short(lo))),
+        ] {
+            if beyond(above) {
+                rich::draw(
+                    &bar_area,
+                    &text,
+                    (bw as i32 / 2, y + 6),
+                    10.0,
+                    &BLACK,
+                    rich::Align::Centre,
+                    false,
+                )
+                .map_err(err)?;
+            }
+        }
         const STEPS: usize = 128;
         let dv = (hi - lo) / STEPS as f64;
         bar.draw_series((0..STEPS).map(|s| {

@@ -341,8 +341,14 @@ fn adhesion(key: &str, spec: &Option<AdhesionSpec>) -> Result<Adhesion, Scenario
                     "must lie in [0, 90) degrees: a bridge with θ ≥ 90° does not attract",
                 ));
             }
-            let v = positive(&format!("{key}.volume"), *volume)
-                .map_err(|_| invalid(format!("{key}.volume"), volume, "must be positive (m³): a bridge of no volume has no rupture distance; omit `adhesion` for dry contacts"))?;
+            let v = non_negative(&format!("{key}.volume"), *volume).map_err(|_| {
+                invalid(
+                    format!("{key}.volume"),
+                    volume,
+                    "must be zero or positive (m³); 0 is the contact-only limit (attraction \
+                     while touching, none apart)",
+                )
+            })?;
             Adhesion::LiquidBridge {
                 surface_tension: gamma,
                 contact_angle: theta.to_radians(),
@@ -472,7 +478,9 @@ pub fn build(s: &Scenario, base_dir: &Path) -> Result<Built, ScenarioError> {
         Some(p) => Some(
             prepare(&mut simulation, p.target, p.strain_rate, p.relax_steps).map_err(
                 |e| match e {
-                    super::prepare::PrepareError::Neighbor(e) => context.box_error(e),
+                    super::prepare::PrepareError::Neighbor(e) => {
+                        context.box_error(e, s.neighbor.skin.is_some())
+                    }
                     super::prepare::PrepareError::Unreachable(msg) => {
                         invalid("preparation", "(target)", msg)
                     }
@@ -526,7 +534,30 @@ struct Context {
 }
 
 impl Context {
-    fn box_error(&self, e: NeighborError) -> ScenarioError {
+    /// The key to blame for a neighbour-grid error: `neighbor.skin` when a skin given by
+    /// the user (`skin_given`) is what makes the cutoff too long for the box, else
+    /// `domain.size`.
+    fn box_error(&self, e: NeighborError, skin_given: bool) -> ScenarioError {
+        if let NeighborError::BoxTooSmall {
+            axis,
+            length,
+            cutoff,
+        } = e
+        {
+            let without_skin = cutoff - self.skin;
+            if skin_given && 3.0 * without_skin < length {
+                return invalid(
+                    "neighbor.skin",
+                    self.skin,
+                    format!(
+                        "makes the neighbour cutoff {cutoff:.6e} m (largest diameter + \
+                         interaction range + skin) too long for the box along {axis} (length \
+                         {length:.6e} m, at least 3 cutoffs): the skin must be below {:.6e} m",
+                        length / 3.0 - without_skin
+                    ),
+                );
+            }
+        }
         invalid("domain.size", format!("{:?}", self.size), e.to_string())
     }
 
@@ -812,10 +843,7 @@ fn assemble(s: &Scenario, base_dir: &Path) -> Result<Assembled, ScenarioError> {
                         "the two edges must span a parallelogram (non-zero, not parallel)",
                     ));
                 }
-                let (na, nb) = (
-                    (ea.length() / h).floor() as usize + 1,
-                    (eb.length() / h).floor() as usize + 1,
-                );
+                let (na, nb) = super::size::lattice_counts(ea.length(), eb.length(), h);
                 if na.saturating_mul(nb) > MAX_PARTICLES {
                     return Err(invalid(
                         format!("{key}.spacing"),
@@ -1037,8 +1065,10 @@ fn assemble(s: &Scenario, base_dir: &Path) -> Result<Assembled, ScenarioError> {
         size,
         warnings: Vec::new(),
     };
+    in_box(s, &particles, &group_start, lo, size, &mut context.warnings)?;
+    weight_within_limits(&particles, &laws, gravity, limits.overlap)?;
     let mut simulation = Simulation::new(particles, domain, laws, plane_walls, gravity, dt, skin)
-        .map_err(|e| context.box_error(e))?;
+        .map_err(|e| context.box_error(e, s.neighbor.skin.is_some()))?;
     simulation.limits = limits;
     initial_state(s, &simulation, &group_start, &mut context.warnings)?;
     Ok(Assembled {
@@ -1046,6 +1076,96 @@ fn assemble(s: &Scenario, base_dir: &Path) -> Result<Assembled, ScenarioError> {
         preparation: target,
         context,
     })
+}
+
+/// Refuses a free sphere whose centre lies outside the box along a non-periodic axis (it
+/// would sit beyond the box's faces, counted in the volume fraction), and warns of those
+/// outside along a periodic axis, which the run wraps into the box.
+fn in_box(
+    s: &Scenario,
+    particles: &Particles,
+    group_start: &[u32],
+    lo: DVec3,
+    size: [f64; 3],
+    warnings: &mut Vec<String>,
+) -> Result<(), ScenarioError> {
+    let hi = lo + DVec3::from_array(size);
+    let mut wrapped = Vec::new();
+    for i in 0..particles.len() {
+        if !particles.motion[i].is_free() {
+            continue;
+        }
+        let r = particles.position[i];
+        for (axis, name) in ["x", "y", "z"].into_iter().enumerate() {
+            if (lo[axis]..=hi[axis]).contains(&r[axis]) {
+                continue;
+            }
+            let who = particle_name(s, group_start, particles.id[i]);
+            if s.domain.periodic[axis] {
+                if wrapped.len() < 3 {
+                    wrapped.push(format!("{who} ({name} = {:e} m)", r[axis]));
+                } else if wrapped.len() == 3 {
+                    wrapped.push("…".into());
+                }
+            } else {
+                return Err(invalid(
+                    format!("{who}.position"),
+                    format!("{:?}", r.to_array()),
+                    format!(
+                        "lies outside the box along the non-periodic axis {name}: it must be in \
+                         [{:e}, {:e}] m (domain.lo, domain.lo + domain.size)",
+                        lo[axis], hi[axis]
+                    ),
+                ));
+            }
+        }
+    }
+    if !wrapped.is_empty() {
+        warnings.push(format!(
+            "spheres outside the box along a periodic axis are wrapped into it: {}",
+            wrapped.join(", ")
+        ));
+    }
+    Ok(())
+}
+
+/// Refuses a gravity under which even the lightest free sphere, resting on its own kind,
+/// would overlap beyond `run.max_overlap` (`m g / k_n > max_overlap · a`): a run would stop
+/// at once on its overlap limit.
+fn weight_within_limits(
+    particles: &Particles,
+    laws: &ContactTable,
+    gravity: DVec3,
+    max_overlap: f64,
+) -> Result<(), ScenarioError> {
+    // |g| without overflow for huge components.
+    let top = gravity.abs().max_element();
+    let g = if top > 0.0 {
+        top * (gravity / top).length()
+    } else {
+        0.0
+    };
+    let lightest = (0..particles.len())
+        .filter(|&i| particles.motion[i].is_free())
+        .min_by(|&a, &b| particles.mass[a].total_cmp(&particles.mass[b]));
+    let Some(i) = lightest else { return Ok(()) };
+    let sp = particles.species[i];
+    let k_n = laws.get(sp, sp).normal.stiffness;
+    let (m, a) = (particles.mass[i], particles.radius[i]);
+    if m * g > max_overlap * a * k_n {
+        return Err(invalid(
+            "gravity",
+            format!("{:?}", gravity.to_array()),
+            format!(
+                "is too strong: the lightest sphere (m = {m:.4e} kg, radius {a:.4e} m) would \
+                 overlap its support by m g / k_n = {:.4e} m, beyond run.max_overlap = \
+                 {max_overlap} of its radius; |g| must be at most {:.4e} m/s²",
+                m * g / k_n,
+                max_overlap * a * k_n / m
+            ),
+        ));
+    }
+    Ok(())
 }
 
 /// An optional limit in (0, 10], or its default.

@@ -3,6 +3,7 @@
 
 mod build;
 mod prepare;
+pub mod size;
 pub mod spec;
 
 pub use build::{Built, Checked, MAX_STEPS, Resolved, build, check, contact_table};
@@ -93,7 +94,16 @@ impl Scenario {
         serde_path_to_error::deserialize(de).map_err(|e| {
             let path = e.path().to_string();
             let inner = e.into_inner();
-            if path.is_empty() || path == "." {
+            // A field checked inside a tagged group reports "`field` = value: allowed" at
+            // the group's path: named here with its full key.
+            let field = inner.message().strip_prefix('`').and_then(|rest| {
+                let (field, tail) = rest.split_once('`')?;
+                let (value, allowed) = tail.strip_prefix(" = ")?.split_once(": ")?;
+                Some(invalid(format!("{path}.{field}"), value, allowed))
+            });
+            if let Some(named) = field.filter(|_| !(path.is_empty() || path == ".")) {
+                named
+            } else if path.is_empty() || path == "." {
                 ScenarioError::Parse(format!("scenario: {inner}"))
             } else {
                 ScenarioError::Parse(format!("scenario key `{path}`: {inner}"))

@@ -340,6 +340,7 @@ pub enum ParticleGroup {
         /// Species name.
         species: String,
         /// Number of spheres, ≥ 1.
+        #[serde(deserialize_with = "whole_count")]
         count: usize,
         /// Mean diameter `d_p` (m).
         mean_diameter: f64,
@@ -511,6 +512,38 @@ where
     let n = v.len();
     v.try_into()
         .map_err(|_| serde::de::Error::invalid_length(n, &"exactly 3 components"))
+}
+
+/// Deserialises a count of spheres, with an error that names the key: inside a tagged
+/// group the parser's own message would point at the `[[particles]]` header instead.
+fn whole_count<'de, D>(d: D) -> Result<usize, D::Error>
+where
+    D: serde::Deserializer<'de>,
+{
+    #[derive(Deserialize)]
+    #[serde(untagged)]
+    enum Written {
+        Integer(i64),
+        Float(f64),
+        Other(toml::Value),
+    }
+    let v = match Written::deserialize(d)? {
+        Written::Integer(n) => n as f64,
+        Written::Float(x) => x,
+        Written::Other(other) => {
+            return Err(serde::de::Error::custom(format!(
+                "`count` = {other}: must be a whole number of spheres, at least 1"
+            )));
+        }
+    };
+    // Zero and too large counts are refused by the build, which names the full key.
+    if v.fract() == 0.0 && v >= 0.0 && v <= usize::MAX as f64 {
+        Ok(v as usize)
+    } else {
+        Err(serde::de::Error::custom(format!(
+            "`count` = {v}: must be a whole number of spheres, at least 1"
+        )))
+    }
 }
 
 /// [`three`] for an optional value.

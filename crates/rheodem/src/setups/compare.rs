@@ -46,7 +46,7 @@ pub fn comparison_markdown(results: &[PointResult]) -> String {
         let Some(ss) = &r.steady_state else {
             let _ = writeln!(
                 s,
-                "| {} | {} | {} | {} | {:?} | – | no rows | | | | | | | | | | | incomplete |",
+                "| {} | {} | {} | {} | {} | – | no rows | | | | | | | | | | | incomplete |",
                 p.mu_p, p.inertial, p.softness, p.bond, p.cohesion
             );
             continue;
@@ -126,8 +126,8 @@ pub fn comparison_markdown(results: &[PointResult]) -> String {
         let pct = |x: Option<f64>| x.map_or("–".to_string(), |v| format!("{:+.2} %", 100.0 * v));
         let num = |x: Option<f64>, d: usize| x.map_or("–".to_string(), |v| format!("{v:.d$}"));
         let law = match p.shear_dynamics {
-            ShearDynamics::Lab => format!("{:?}", p.cohesion),
-            d => format!("{:?}, {d}", p.cohesion),
+            ShearDynamics::Lab => p.cohesion.to_string(),
+            d => format!("{}, {d}", p.cohesion),
         };
         if phi_seed.is_none() {
             notes.push("no fitted law for this μ_p");
@@ -223,7 +223,7 @@ fn mu_of(r: &PointResult) -> Option<(f64, f64)> {
 
 const FIGURES: [FigureSpec; 6] = [
     FigureSpec {
-        file: "mu_vs_bond",
+        file: "mu-vs-bond",
         title: "μ against Bo (reversible adhesion), I = 0.02, p* = 0.01",
         x_label: "Bond number Bo",
         y_label: "macroscopic friction μ",
@@ -235,7 +235,7 @@ const FIGURES: [FigureSpec; 6] = [
         range: (0.0, 4.0),
     },
     FigureSpec {
-        file: "phi_vs_bond",
+        file: "phi-vs-bond",
         title: "φ against Bo (reversible adhesion), I = 0.02, p* = 0.01",
         x_label: "Bond number Bo",
         y_label: "volume fraction φ",
@@ -247,7 +247,7 @@ const FIGURES: [FigureSpec; 6] = [
         range: (0.0, 4.0),
     },
     FigureSpec {
-        file: "phi_vs_inertial",
+        file: "phi-vs-inertial",
         title: "φ against I, p* = 0.01, Bo = 0",
         x_label: "inertial number I",
         y_label: "volume fraction φ",
@@ -259,7 +259,7 @@ const FIGURES: [FigureSpec; 6] = [
         range: (0.004, 0.11),
     },
     FigureSpec {
-        file: "mu_vs_inertial",
+        file: "mu-vs-inertial",
         title: "μ against I, p* = 0.01, Bo = 0",
         x_label: "inertial number I",
         y_label: "macroscopic friction μ",
@@ -271,7 +271,7 @@ const FIGURES: [FigureSpec; 6] = [
         range: (0.004, 0.11),
     },
     FigureSpec {
-        file: "phi_vs_softness",
+        file: "phi-vs-softness",
         title: "φ against p*, I = 0.02, Bo = 0",
         x_label: "softness p*",
         y_label: "volume fraction φ",
@@ -283,7 +283,7 @@ const FIGURES: [FigureSpec; 6] = [
         range: (0.001, 0.022),
     },
     FigureSpec {
-        file: "mu_vs_softness",
+        file: "mu-vs-softness",
         title: "μ against p*, I = 0.02, Bo = 0",
         x_label: "softness p*",
         y_label: "macroscopic friction μ",

@@ -37,6 +37,19 @@ pub enum Cohesion {
     LinearIrreversible,
 }
 
+impl std::fmt::Display for Cohesion {
+    /// The law as a shear-box spec names it (`none`, `reversible`, `liquid_bridge`,
+    /// `linear_irreversible`).
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            Cohesion::None => "none",
+            Cohesion::Reversible => "reversible",
+            Cohesion::LiquidBridge => "liquid_bridge",
+            Cohesion::LinearIrreversible => "linear_irreversible",
+        })
+    }
+}
+
 /// Contact angle of the liquid-bridge option (degrees), as in Shi et al. 2020 and Roy et al. 2016.
 const BRIDGE_ANGLE_DEG: f64 = 20.0;
 

@@ -8,8 +8,10 @@
 //!    larger than the cell (smooth cylinders at `R_i − d_p/2`, `R_o + d_p/2`, a smooth floor
 //!    at `z = −d_p/2`), loosely, up to about twice the filling height;
 //! 2. **settle** — they fall under gravity with the damping multiplied by
-//!    `settle_damping` until the kinetic energy is below `settle_kinetic_ratio` times the
-//!    elastic energy; then the layer of particles touching each mould wall is frozen into
+//!    `settle_damping` until the translational kinetic energy is below
+//!    `settle_kinetic_ratio` times the energy of the contact springs (the repulsive elastic
+//!    energy, without the negative adhesive potential of a cohesive law, so that the test
+//!    means "at rest" under any law); then the layer of particles touching each mould wall is frozen into
 //!    the rough walls: inner cylinder and inner bottom (`r < R_s`) fixed, outer cylinder and
 //!    outer bottom rotating. The smooth mould walls stay as backstops. The state is saved as
 //!    `settled.bin`, from which any number of shear runs can start (`from_settled`);
@@ -27,7 +29,9 @@ use crate::domain::Domain;
 use crate::generate::{Rng, polydisperse_radii};
 use crate::io::atomic::write_atomic;
 use crate::io::lock::DirLock;
+use crate::io::made_by::{self, Maker};
 use crate::io::vtk;
+use crate::memory::{self, Bytes};
 use crate::neighbor::min_wedge_angle;
 use crate::particles::{Motion, Particles, Sphere};
 use crate::plot::{Labels, Markers, Series, plot_svg};
@@ -130,7 +134,7 @@ pub struct SplitBottomSpec {
     /// Factor on every damping coefficient while settling.
     pub settle_damping: f64,
     /// Settling ends when the translational kinetic energy is below this fraction of the
-    /// elastic energy.
+    /// energy of the contact springs (the repulsive elastic energy, adhesion left out).
     pub settle_kinetic_ratio: f64,
     /// Settling ends at this time (s) even if the kinetic criterion is not met (reported).
     pub settle_max_time: f64,
@@ -211,6 +215,44 @@ const INNER_BOTTOM: u16 = 1;
 const OUTER_BOTTOM: u16 = 2;
 const OUTER_WALL: u16 = 3;
 const BACKSTOPS: u16 = 4;
+
+/// Records a failure in the run directory's `summary.json`: the last summary written (or a
+/// new one for `spec`) with `"status": "failed"`, the error and where it happened
+/// (`failed_at`).
+fn record_failure(
+    dir: &Path,
+    spec: &SplitBottomSpec,
+    failed_at: serde_json::Value,
+    error: &RunError,
+) -> Result<(), RunError> {
+    let path = dir.join("summary.json");
+    let mut summary = std::fs::read_to_string(&path)
+        .ok()
+        .and_then(|t| serde_json::from_str::<serde_json::Value>(&t).ok())
+        .filter(|v| v.is_object())
+        .unwrap_or_else(|| {
+            serde_json::json!({
+                "program": "rheodem split-bottom",
+                "version": crate::VERSION,
+                "commit": crate::COMMIT,
+                "seed": spec.seed,
+                "spec": spec,
+            })
+        });
+    summary["status"] = "failed".into();
+    summary["error"] = error.to_string().into();
+    summary["failed_at"] = failed_at;
+    let text = serde_json::to_string_pretty(&summary).unwrap_or_default();
+    write_atomic(&path, text.as_bytes()).map_err(io_err("write", &path))
+}
+
+/// Marks `dir` as a split-bottom run directory ([`made_by`]).
+fn mark_split_bottom(dir: &Path) -> Result<(), RunError> {
+    made_by::mark(dir, Maker::SplitBottom).map_err(io_err("write", &dir.join(made_by::FILE)))
+}
+
+/// Largest number of particles a cell may hold (the limit of scenario files).
+const MAX_PARTICLES: usize = 50_000_000;
 
 /// Volume fraction assumed for the settled packing when counting the particles to insert.
 const SETTLED_FRACTION: f64 = 0.62;
@@ -296,7 +338,8 @@ pub struct Row {
 pub struct SettleReport {
     /// Time at the end of settling (s).
     pub time: f64,
-    /// Translational `E_kin / E_el` at the end.
+    /// Translational `E_kin / E_springs` at the end (`E_springs` the energy of the contact
+    /// springs, without the adhesive potential).
     pub kinetic_ratio: f64,
     /// Whether the kinetic criterion was met (rather than the time limit).
     pub criterion_met: bool,
@@ -306,6 +349,21 @@ pub struct SettleReport {
     pub wall_particles: [usize; 4],
     /// Height of the free surface (m).
     pub surface_height: f64,
+}
+
+impl SettleReport {
+    /// A warning when settling ended on its time limit rather than its criterion (`None`
+    /// when the criterion was met), naming the keys that control it.
+    pub fn limit_notice(&self, spec: &SplitBottomSpec) -> Option<String> {
+        (!self.criterion_met).then(|| {
+            format!(
+                "settling ended at its time limit settle_max_time = {} s without reaching \
+                 settle_kinetic_ratio = {:e} (E_kin/E_springs = {:.3e} at t = {:.3} s): the \
+                 bed is still moving; raise settle_max_time or settle_damping",
+                spec.settle_max_time, spec.settle_kinetic_ratio, self.kinetic_ratio, self.time
+            )
+        })
+    }
 }
 
 /// Steady-state results of the shear stage.
@@ -336,7 +394,7 @@ pub struct SlabFit {
     pub fit: Result<ErfFit, String>,
 }
 
-/// Dimensionless groups and scales of the run (docs/model.md §10.2).
+/// Dimensionless groups and scales of the run (docs/model.md §10.3).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Groups {
     /// Weight of a mean particle `f_g = ρ_p (π/6) d_p³ g` (N).
@@ -424,6 +482,13 @@ impl SplitBottomSpec {
         })
     }
 
+    /// A spec from a TOML table (a study point); the error names the offending key's path
+    /// in the table.
+    pub fn from_table(table: toml::Table) -> Result<SplitBottomSpec, ScenarioError> {
+        serde_path_to_error::deserialize(toml::Value::Table(table))
+            .map_err(|e| ScenarioError::Parse(format!("key `{}`: {}", e.path(), e.inner())))
+    }
+
     /// The spec as TOML.
     pub fn to_toml(&self) -> String {
         toml::to_string(self).unwrap_or_default()
@@ -471,6 +536,52 @@ impl SplitBottomSpec {
         }
     }
 
+    /// Checks the adhesive law's values, and that its interaction range (the rupture
+    /// distance `S_c`) stays below the mean diameter `d` (m): a longer range lets a bridge
+    /// reach past a particle's neighbours, outside the laws' validity (docs/model.md §2.5).
+    fn check_cohesion(&self, d: f64) -> Result<(), ScenarioError> {
+        let range_key = match self.cohesion {
+            Cohesion::Dry => return Ok(()),
+            Cohesion::Willett {
+                surface_tension,
+                volume,
+                contact_angle_deg,
+            } => {
+                positive("cohesion.surface_tension", surface_tension)?;
+                // 0: the contact-only limit (attraction while touching, none apart).
+                non_negative("cohesion.volume", volume)?;
+                if !(contact_angle_deg.is_finite() && (0.0..90.0).contains(&contact_angle_deg)) {
+                    return Err(invalid(
+                        "cohesion.contact_angle_deg",
+                        contact_angle_deg,
+                        "must lie in [0, 90) degrees: a bridge with θ ≥ 90° does not attract",
+                    ));
+                }
+                ("cohesion.volume", volume)
+            }
+            Cohesion::Linear {
+                max_force,
+                stiffness,
+            } => {
+                positive("cohesion.max_force", max_force)?;
+                positive("cohesion.stiffness", stiffness)?;
+                ("cohesion.stiffness", stiffness)
+            }
+        };
+        let range = self.law().range();
+        if !(range.is_finite() && range <= d) {
+            return Err(invalid(
+                range_key.0,
+                range_key.1,
+                format!(
+                    "gives an interaction range S_c = {range:.3e} m beyond the mean diameter \
+                     d_p = {d:.3e} m (the law is meant for bridges shorter than a particle)"
+                ),
+            ));
+        }
+        Ok(())
+    }
+
     /// Checks every value and resolves the geometry; errors name the key and the range.
     pub fn geometry(&self) -> Result<Geometry, ScenarioError> {
         let scale = positive("scale", self.scale)?;
@@ -494,6 +605,7 @@ impl SplitBottomSpec {
         positive("settle_kinetic_ratio", self.settle_kinetic_ratio)?;
         positive("settle_max_time", self.settle_max_time)?;
         positive("duration", self.duration)?;
+        self.check_cohesion(d)?;
         if !(self.average_from >= 0.0 && self.average_from < self.duration) {
             return Err(invalid(
                 "average_from",
@@ -532,11 +644,13 @@ impl SplitBottomSpec {
                 self.scale,
                 format!(
                     "leaves the cell (R_s − R_i = {:.3e} m, R_o − R_s = {:.3e} m, H = {:.3e} m) \
-                     narrower than two particle diameters ({:.3e} m)",
+                     narrower than two particle diameters ({:.3e} m): the scale must be at \
+                     least {:.4}",
                     split - inner,
                     outer - split,
                     height,
-                    2.0 * d
+                    2.0 * d,
+                    scale * 2.0 * d / (split - inner).min(outer - split).min(height)
                 ),
             ));
         }
@@ -569,7 +683,19 @@ impl SplitBottomSpec {
         }
         let area = 0.5 * angle * (mould_outer.powi(2) - mould_inner.powi(2));
         let mean_volume = 4.0 / 3.0 * PI * mean_radius_cubed(r_min, r_max);
-        let count = (SETTLED_FRACTION * area * (height + 0.5 * d) / mean_volume).round() as usize;
+        let count = (SETTLED_FRACTION * area * (height + 0.5 * d) / mean_volume).round();
+        if count > MAX_PARTICLES as f64 {
+            return Err(invalid(
+                "scale",
+                self.scale,
+                format!(
+                    "gives {count:.3e} particles, more than the {MAX_PARTICLES} a cell may hold: \
+                     the scale must be at most about {:.3}",
+                    self.scale * (MAX_PARTICLES as f64 / count).cbrt()
+                ),
+            ));
+        }
+        let count = count as usize;
         let fill_top = floor + count as f64 * mean_volume / (FILL_FRACTION * area) + 2.0 * r_max;
         Ok(Geometry {
             inner_radius: inner,
@@ -585,6 +711,36 @@ impl SplitBottomSpec {
             fill_top,
             range,
         })
+    }
+
+    /// The particle count and the estimated peak memory (bytes) of the cell on `threads`
+    /// worker threads, known before anything is allocated; refused (naming `scale`) when
+    /// the estimate exceeds `limit` bytes, with the largest scale that fits.
+    pub fn memory_estimate(
+        &self,
+        threads: usize,
+        limit: Option<u64>,
+    ) -> Result<(usize, u64), ScenarioError> {
+        let count = self.geometry()?.count;
+        let bytes = memory::estimate(count as u64, threads);
+        match limit {
+            Some(limit) if bytes > limit => {
+                let fits = memory::particles_within(limit, threads) as f64;
+                Err(invalid(
+                    "scale",
+                    self.scale,
+                    format!(
+                        "gives {count} particles, an estimated {} on {threads} threads, more \
+                         than the memory limit of {} (the machine's physical memory unless \
+                         --max-memory says otherwise): the scale must be at most about {:.3}",
+                        Bytes(bytes),
+                        Bytes(limit),
+                        self.scale * (fits / count as f64).cbrt()
+                    ),
+                ))
+            }
+            _ => Ok((count, bytes)),
+        }
     }
 
     /// Dimensionless groups for the time step `dt` (s).
@@ -700,9 +856,15 @@ impl SplitBottomRun {
         if dir.join("checkpoint.bin").exists() && !force {
             return Err(RunError::Exists(dir.to_path_buf()));
         }
-        match SplitBottomRun::fill_cell(spec, geometry, lock, dir) {
+        mark_split_bottom(dir)?;
+        match SplitBottomRun::fill_cell(spec.clone(), geometry, lock, dir) {
             Err(e) if !existed => {
                 let _ = std::fs::remove_dir_all(dir);
+                Err(e)
+            }
+            Err(e) => {
+                // The error itself matters more than a summary that cannot be written.
+                let _ = record_failure(dir, &spec, "fill".into(), &e);
                 Err(e)
             }
             other => other,
@@ -830,6 +992,7 @@ impl SplitBottomRun {
         if dir.join("checkpoint.bin").exists() && !force {
             return Err(RunError::Exists(dir.to_path_buf()));
         }
+        mark_split_bottom(dir)?;
         let mut run = SplitBottomRun {
             spec,
             geometry,
@@ -841,9 +1004,14 @@ impl SplitBottomRun {
             fields: None,
             ..source
         };
-        run.begin_shear()?;
-        run.write_spec(dir)?;
-        run.checkpoint(dir)?;
+        let begun = run
+            .begin_shear()
+            .and_then(|()| run.write_spec(dir))
+            .and_then(|()| run.checkpoint(dir));
+        if let Err(e) = begun {
+            let _ = run.write_failure(dir, &e);
+            return Err(e);
+        }
         Ok(run)
     }
 
@@ -877,9 +1045,58 @@ impl SplitBottomRun {
         stop: u64,
         progress: &mut dyn FnMut(Stage, u64, u64),
     ) -> Result<(), RunError> {
+        self.run_steps(dir, stop, false, progress)
+    }
+
+    /// Runs the current stage to its end (settle: its criterion or its time limit, see
+    /// [`SplitBottomRun::settled`]; shear: its duration, with the outputs written), so that
+    /// a caller can report between stages.
+    pub fn advance_stage(
+        &mut self,
+        dir: &Path,
+        progress: &mut dyn FnMut(Stage, u64, u64),
+    ) -> Result<(), RunError> {
+        self.run_steps(dir, u64::MAX, true, progress)
+    }
+
+    /// Steps until step `stop`, the run's end, or (`one_stage`) the end of the current
+    /// stage; on an error the summary says "failed" and why.
+    fn run_steps(
+        &mut self,
+        dir: &Path,
+        stop: u64,
+        one_stage: bool,
+        progress: &mut dyn FnMut(Stage, u64, u64),
+    ) -> Result<(), RunError> {
+        let outcome = self.steps(dir, stop, one_stage, progress);
+        if let Err(e) = &outcome {
+            // The error itself matters more than a summary that cannot be written.
+            let _ = self.write_failure(dir, e);
+        }
+        outcome
+    }
+
+    /// Records a failure in `summary.json` (see [`record_failure`]).
+    fn write_failure(&self, dir: &Path, error: &RunError) -> Result<(), RunError> {
+        let at = serde_json::json!({
+            "stage": self.stage,
+            "time": self.simulation.time,
+            "steps": self.simulation.step,
+        });
+        record_failure(dir, &self.spec, at, error)
+    }
+
+    fn steps(
+        &mut self,
+        dir: &Path,
+        stop: u64,
+        one_stage: bool,
+        progress: &mut dyn FnMut(Stage, u64, u64),
+    ) -> Result<(), RunError> {
         let dt = self.simulation.dt;
         let mut clock = Instant::now();
-        while self.simulation.step < stop {
+        let first = self.stage;
+        while self.simulation.step < stop && !(one_stage && self.stage != first) {
             match self.stage {
                 Stage::Settle => {
                     let check = ((0.005 / dt).round() as u64).max(1);
@@ -893,8 +1110,11 @@ impl SplitBottomRun {
                         let row = self.row();
                         // Translational energy only: without torsion resistance a particle
                         // spinning about its contact normal is never slowed down, so the
-                        // rotational energy of a settled bed need not vanish.
-                        let energies = (row.kinetic_translational, row.elastic_energy);
+                        // rotational energy of a settled bed need not vanish. Against the
+                        // springs' energy alone: with a cohesive law the elastic energy
+                        // holds the negative adhesive potential and may be below zero.
+                        let springs = self.simulation.contact_summary().spring_energy;
+                        let energies = (row.kinetic_translational, springs);
                         self.sane()?;
                         self.rows.push(row);
                         let verdict = end.verdict(next, self.simulation.time, Some(energies));
@@ -1294,6 +1514,7 @@ impl SplitBottomRun {
             "version": crate::VERSION,
             "commit": crate::COMMIT,
             "seed": self.spec.seed,
+            "status": if self.stage == Stage::Done { "completed" } else { "running" },
             "stage": self.stage,
             "from": self.from,
             "time": self.simulation.time,

@@ -173,6 +173,21 @@ pub fn offline_fields(
 ) -> Result<CgSums, RunError> {
     let kernel = settings.kernel(run.spec.diameter)?;
     let mut sums = CgSums::new(settings.grid(run)?)?;
+    // Refused before anything is read or written: fields of no sample are all NaN.
+    if window_records(dir, run).next().is_none() {
+        return Err(RunError::Scenario(crate::scenario::invalid(
+            "snapshots",
+            run.spec.snapshots,
+            format!(
+                "the run stored {} snapshots, none in its averaging window (from \
+                 average_from = {} s after the start of shear): there is nothing to \
+                 coarse-grain; run the cell with snapshots ≥ 1 (its own fields, \
+                 cg_every > 0, are in its fields.csv already)",
+                run.snapshots.len(),
+                run.spec.average_from
+            ),
+        )));
+    }
     for snapshot in window_records(dir, run) {
         let (time, particles, contacts) = snapshot?;
         sums.add_snapshot(
@@ -342,10 +357,12 @@ pub struct LawComparison {
     pub inertial_median: f64,
     /// Median softness of the compared points.
     pub softness_median: f64,
-    /// `φ / φ_law`.
-    pub volume_fraction: Option<Ratio>,
-    /// `μ / μ_law`.
-    pub friction: Option<Ratio>,
+    /// `φ / φ_law` (named `volume_fraction` in summaries written before 2026-12-06).
+    #[serde(alias = "volume_fraction")]
+    pub volume_fraction_ratio: Option<Ratio>,
+    /// `μ / μ_law` (named `friction` in summaries written before 2026-12-06).
+    #[serde(alias = "friction")]
+    pub friction_ratio: Option<Ratio>,
 }
 
 /// `φ_law` and `μ_law` at a band point (`NaN` outside the laws' fit ranges or without a
@@ -391,8 +408,8 @@ fn compare_laws(mu_p: f64, points: &[RheologyPoint], p_min: f64) -> Option<LawCo
         mu_p,
         inertial_median: median(&mut inertial),
         softness_median: median(&mut softness),
-        volume_fraction: Ratio::of(&phi),
-        friction: Ratio::of(&mu),
+        volume_fraction_ratio: Ratio::of(&phi),
+        friction_ratio: Ratio::of(&mu),
     })
 }
 
@@ -497,24 +514,31 @@ pub fn write_band(band: &BandRheology, dir: &Path) -> Result<(), RunError> {
 /// `band-rheology.svg`: `τ` against `P` of the band points, with the fitted line over the
 /// fitted range.
 fn write_band_figure(band: &BandRheology, dir: &Path) -> Result<(), RunError> {
-    let points: Vec<(f64, f64, f64)> = band
-        .points
-        .iter()
-        .filter(|p| p.pressure.is_finite() && p.shear_stress.is_finite())
+    let finite = || {
+        band.points
+            .iter()
+            .filter(|p| p.pressure.is_finite() && p.shear_stress.is_finite())
+    };
+    // The fit takes the points at or above its pressure cut-off; those below are drawn
+    // apart.
+    type Points = Vec<(f64, f64, f64)>;
+    let (fitted, excluded): (Points, Points) = finite()
         .map(|p| (p.pressure, p.shear_stress, 0.0))
-        .collect();
-    if points.is_empty() {
+        .partition(|p| p.0 >= band.pressure_min);
+    if fitted.is_empty() && excluded.is_empty() {
         return Ok(());
     }
-    let top = points.iter().map(|p| p.0).fold(0.0, f64::max);
+    let top = finite().map(|p| p.pressure).fold(0.0, f64::max);
     let line: Vec<(f64, f64)> = band
         .fit
         .iter()
         .flat_map(|f| [band.pressure_min, top].map(|p| (p, f.slope * p + f.intercept)))
         .collect();
     let label = band.fit.map_or("no fit (too few points)".to_string(), |f| {
-        format!("τ = {:.3} P + {:.3} Pa", f.slope, f.intercept)
+        let sign = if f.intercept < 0.0 { '−' } else { '+' };
+        format!("τ = {:.3} P {sign} {:.3} Pa", f.slope, f.intercept.abs())
     });
+    let cut = format!("below P_min = {:.3} Pa, not fitted", band.pressure_min);
     let svg = plot_svg(
         &Labels {
             title: "Shear band: shear stress against pressure",
@@ -526,10 +550,16 @@ fn write_band_figure(band: &BandRheology, dir: &Path) -> Result<(), RunError> {
             label: &label,
             points: &line,
         }],
-        &[Markers {
-            label: "band centre points",
-            points: &points,
-        }],
+        &[
+            Markers {
+                label: "band centre points, fitted",
+                points: &fitted,
+            },
+            Markers {
+                label: &cut,
+                points: &excluded,
+            },
+        ],
     )
     .map_err(|e| RunError::Scenario(crate::scenario::invalid("figure", "band-rheology.svg", e)))?;
     let path = dir.join("band-rheology.svg");
@@ -670,7 +700,10 @@ mod tests {
         });
         points.push(point(0.02, 0.05, 1.0));
         let c = compare_laws(0.01, &points, 100.0).expect("tabulated μ_p");
-        let (phi, mu) = (c.volume_fraction.expect("φ"), c.friction.expect("μ"));
+        let (phi, mu) = (
+            c.volume_fraction_ratio.expect("φ"),
+            c.friction_ratio.expect("μ"),
+        );
         assert_eq!((phi.points, mu.points), (9, 10));
         assert!((phi.mean - 1.0).abs() < 1e-12 && phi.stderr < 1e-12);
         assert!((mu.mean - 1.0).abs() < 1e-12 && mu.stderr < 1e-12);
@@ -680,7 +713,7 @@ mod tests {
             .map(|k| point(0.01 * f64::from(k), 0.005, 0.9))
             .collect();
         let c = compare_laws(0.01, &scaled, 100.0).expect("tabulated μ_p");
-        assert!((c.friction.expect("μ").mean - 0.9).abs() < 1e-12);
+        assert!((c.friction_ratio.expect("μ").mean - 0.9).abs() < 1e-12);
         assert!(compare_laws(0.123, &scaled, 100.0).is_none());
     }
 }

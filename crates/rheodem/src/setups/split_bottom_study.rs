@@ -58,9 +58,12 @@ pub fn expand(
     points: &[toml::Table],
 ) -> Result<Vec<(String, SplitBottomSpec)>, ScenarioError> {
     let mut out: Vec<(String, SplitBottomSpec)> = Vec::new();
+    // Every key of [base] is checked first, so that a typo there is named even in a study
+    // that has no points yet.
+    SplitBottomSpec::from_table(base.clone())
+        .map_err(|e| ScenarioError::Parse(format!("[base]: {e}")))?;
     for (k, t) in point_tables(base, grid, points)?.into_iter().enumerate() {
-        let text = toml::to_string(&t).map_err(|e| ScenarioError::Parse(e.to_string()))?;
-        let spec = SplitBottomSpec::from_toml(&text)
+        let spec = SplitBottomSpec::from_table(t)
             .map_err(|e| ScenarioError::Parse(format!("study point {k}: {e}")))?;
         spec.geometry()
             .map_err(|e| ScenarioError::Parse(format!("study point {k}: {e}")))?;

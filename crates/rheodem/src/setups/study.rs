@@ -250,7 +250,7 @@ pub fn report(
 }
 
 /// Builds the report of a split-bottom study from its finished runs (`(name,
-/// summary.json)`): status, the runs and the fits of Roy et al. 2017 beside the papers'
+/// summary.json)`): status, the runs and the fits of Roy et al. 2016 beside the papers'
 /// coefficients ([`super::wet_study`]), and their figures.
 pub fn split_bottom_report(
     study: &StudySpec,
@@ -270,7 +270,7 @@ pub fn split_bottom_report(
     }
     let mut figures = Vec::new();
     if !runs.is_empty() {
-        let _ = writeln!(md, "## The runs and the relations of Roy et al. 2017\n");
+        let _ = writeln!(md, "## The runs and the relations of Roy et al. 2016\n");
         let wet = super::wet_study::wet_study(&runs)?;
         md += &wet.markdown;
         figures = wet.figures;

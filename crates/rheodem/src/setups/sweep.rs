@@ -27,6 +27,7 @@
 use super::shear_box::{ShearBoxSpec, SlabRates, SteadyState, steady_state};
 use crate::domain::ShearDynamics;
 use crate::io::atomic::write_atomic;
+use crate::io::made_by::{self, Maker};
 use crate::run::{Run, RunError, io_err};
 use crate::scenario::{ScenarioError, invalid};
 use serde::{Deserialize, Serialize};
@@ -133,6 +134,13 @@ pub fn point_tables(
 
 /// Expands the sweep into its points, each with a directory name built from its controls.
 pub fn expand(spec: &SweepSpec) -> Result<Vec<(String, ShearBoxSpec)>, ScenarioError> {
+    // A typo in [base] is named even in a sweep without points (the controls a point must
+    // give, missing from [base] alone, are not an error there).
+    if let Err(e) = ShearBoxSpec::from_table(spec.base.clone())
+        && !e.to_string().contains("missing field")
+    {
+        return Err(ScenarioError::Parse(format!("[base]: {e}")));
+    }
     let tables = point_tables(&spec.base, &spec.grid, &spec.point)?;
     let mut out = Vec::new();
     for (k, t) in tables.into_iter().enumerate() {
@@ -266,6 +274,7 @@ pub fn run_point(
     } else {
         Run::start_locked(lock, existed, scenario, Path::new("."), dir, threads, true)?
     };
+    made_by::mark(dir, Maker::ShearBox).map_err(io_err("write", &dir.join(made_by::FILE)))?;
     run.advance_until(dir, run.plan.steps, progress)?;
     let result = PointResult {
         name: name.to_string(),

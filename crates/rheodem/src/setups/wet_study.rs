@@ -1,4 +1,4 @@
-//! The wet split-bottom study of Roy et al. 2016/2017 (docs/model.md §10.6): from a set of
+//! The wet split-bottom study of Roy et al. 2016 (docs/model.md §10.6): from a set of
 //! finished split-bottom runs with band rheology, the relations between the microscopic
 //! parameters (bridge volume through the rupture distance `S_c*`, surface tension through
 //! `γ*`) and the macroscopic cohesion `c*` and torque `T*`, fitted as the papers do and set
@@ -19,7 +19,7 @@ use serde::Deserialize;
 use std::fmt::Write;
 use std::path::Path;
 
-/// The papers' coefficients (Roy et al. 2017, Sects. 3.1–3.2).
+/// The papers' coefficients (Roy et al. 2016, Sects. 3.1–3.2).
 pub mod paper {
     /// Eq. 20: slope `a` of `c* − c*₀ = a S_c*` at `γ_s = 0.020 N/m`.
     pub const A_AT_0_020: f64 = 0.9805;
@@ -398,7 +398,7 @@ pub fn wet_study(runs: &[WetRun]) -> Result<WetStudy, String> {
         figures.push(group_figure(
             "cstar-vs-rupture",
             &Labels {
-                title: "c* − c*₀ against S_c* (Roy et al. 2017, Fig. 8a)",
+                title: "c* − c*₀ against S_c* (Roy et al. 2016, Fig. 8a)",
                 x: "rupture distance S_c* = S_c/d_p",
                 y: "c* − c*₀ (c*₀ the fitted V_b → 0 limit)",
             },
@@ -426,7 +426,7 @@ pub fn wet_study(runs: &[WetRun]) -> Result<WetStudy, String> {
         figures.push(group_figure(
             "cstar-over-tension-vs-rupture",
             &Labels {
-                title: "(c* − c*₀)/γ* against S_c* (Roy et al. 2017, Fig. 9)",
+                title: "(c* − c*₀)/γ* against S_c* (Roy et al. 2016, Fig. 9)",
                 x: "rupture distance S_c*",
                 y: "(c* − c*₀)/γ*",
             },
@@ -512,7 +512,7 @@ pub fn wet_study(runs: &[WetRun]) -> Result<WetStudy, String> {
         figures.push(group_figure(
             "cstar-vs-tension",
             &Labels {
-                title: "c* against γ* (Roy et al. 2017, Fig. 8b)",
+                title: "c* against γ* (Roy et al. 2016, Fig. 8b)",
                 x: "surface tension γ* = γ_s d_p/f_g",
                 y: "steady-state cohesion c*",
             },
@@ -533,7 +533,7 @@ pub fn wet_study(runs: &[WetRun]) -> Result<WetStudy, String> {
         figures.push(group_figure(
             "torque-vs-tension",
             &Labels {
-                title: "Wall torque T* against γ* (Roy et al. 2017, Fig. 11)",
+                title: "Wall torque T* against γ* (Roy et al. 2016, Fig. 11)",
                 x: "surface tension γ*",
                 y: "T* = T/(f_g d_p)",
             },
@@ -573,7 +573,7 @@ pub fn wet_study(runs: &[WetRun]) -> Result<WetStudy, String> {
         figures.push(group_figure(
             "torque-macro-vs-wall",
             &Labels {
-                title: "T_macro* against the wall torque T* (Roy et al. 2017, Fig. 13)",
+                title: "T_macro* against the wall torque T* (Roy et al. 2016, Fig. 13)",
                 x: "wall torque T*",
                 y: "T_macro* = M (μ P_avg + c)/(f_g d_p)",
             },
