@@ -491,3 +491,20 @@ fn shear_box_help_shows_the_defaults() {
         assert_eq!(shown, value.to_string(), "{flag}");
     }
 }
+
+/// R3: a sphere outside the box along a periodic axis is wrapped into it, and `check` says
+/// so.
+#[test]
+fn r3_spheres_wrapped_on_a_periodic_axis_are_reported() {
+    let dir = temp("audit2", "wrap");
+    let text = scenario("true, true, true", "", &one_sphere("[0.5, 0.01, 0.01]"));
+    std::fs::write(dir.join("wrap.toml"), text).expect("scenario");
+    let out = rheodem_in(&dir, &["check", "wrap.toml"]);
+    let err = stderr(&out);
+    assert!(out.status.success(), "{err}");
+    assert!(
+        err.contains("wrapped into it: particles[0].spheres[0] (x = 5e-1 m)"),
+        "{err}"
+    );
+    std::fs::remove_dir_all(&dir).ok();
+}

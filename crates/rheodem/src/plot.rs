@@ -360,3 +360,20 @@ fn draw_plot<DB: DrawingBackend>(
     root.present().map_err(err)?;
     Ok(())
 }
+
+#[cfg(test)]
+mod tests {
+    use super::tick_label;
+
+    #[test]
+    fn tick_labels_read_as_written_by_hand() {
+        assert_eq!(tick_label(20.0), "20");
+        assert_eq!(tick_label(-0.0), "0");
+        assert_eq!(tick_label(-1e-17), "0");
+        assert_eq!(tick_label(0.30000000000000004), "0.3");
+        assert_eq!(tick_label(-2.5), "-2.5");
+        assert_eq!(tick_label(450000.0), "4.5e5");
+        assert_eq!(tick_label(2.2e-4), "2.2e-4");
+        assert_eq!(tick_label(0.0125), "0.0125");
+    }
+}

@@ -273,6 +273,24 @@ mod tests {
         assert_eq!((lo, hi), (3.0, 97.0));
     }
 
+    /// A map whose colour scale saturates says so at that end of the bar, and only there.
+    #[test]
+    fn saturated_ends_are_labelled() {
+        let xs: Vec<f64> = (0..10).map(f64::from).collect();
+        let mut values: Vec<f64> = (0..100).map(f64::from).collect();
+        values[99] = 1e9;
+        let svg = ramp(&xs, &xs, &values).to_svg().expect("svg");
+        // The scale spans the 2 % and 98 % quantiles: 2 and 97 here.
+        assert!(svg.contains("≥ 97 saturate"), "the top end is not labelled");
+        assert!(
+            svg.contains("≤ 2 saturate"),
+            "the bottom end is not labelled"
+        );
+        let inside: Vec<f64> = (0..100).map(|v| f64::from(v % 2)).collect();
+        let svg = ramp(&xs, &xs, &inside).to_svg().expect("svg");
+        assert!(!svg.contains("saturate"), "nothing saturates here");
+    }
+
     #[test]
     fn shape_mismatch_and_empty_fields_are_refused() {
         let xs = [0.0, 1.0];
