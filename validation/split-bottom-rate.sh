@@ -1,0 +1,118 @@
+#!/bin/bash
+# The split-bottom cell compared with Roy et al. (2016) and Shi et al. (2020) like for like
+# (issue: the papers' rotation rate and averaging window): the full-size 30° cell from one
+# settled state, `--time-step mean-pair`, fields sampled every 0.1 s in the averaging window.
+#
+# Every run of a group is made by one binary, built from one commit and kept outside
+# target/ (in validation/.bin/, not in git), with one thread count ($THREADS, default 1),
+# so that a run resumed on another day or machine continues with the same bits while the
+# code on main moves on. A binary is built on first use from a detached worktree of its
+# commit. Each run's summary.json records the commit. The dry rate series was made by
+# $RATE_COMMIT, before Willett's contact-only limit (0 nl) existed; every later group uses
+# $COMMIT, and the group `bits` checks that the two give the same bits for a dry run.
+#
+# Resumable: rerun the script (or one group); a finished run only rewrites its outputs.
+# Usage: bash validation/split-bottom-rate.sh GROUP…
+#   settle — the settled state (committed as $V/settled/settled.bin: a new machine never
+#            re-settles)
+#   rate   — dry, Ω = 0.5, 0.25, 0.125 and 0.0628 rad/s over the same angles 0.5–1.25 rad
+#   bits   — a 0.05 s dry shear from the settled state with both binaries: the time series
+#            must be identical
+#   wet05  — Willett at 0.020 N/m, 75 nl and 0 nl (the contact-only limit) at Ω = 0.5 over
+#            0.5–1.25 rad: the references of the wet-excess candidates
+#   seeds  — two more realisations (filling seeds 2 and 3, each settled on its own): dry and
+#            75 nl at Ω = 0.5 over 0.5–1.25 rad, for the scatter of the wet–dry difference
+set -euo pipefail
+cd "$(dirname "$0")/.."
+RATE_COMMIT=cac761ba48cd
+COMMIT=75dfb0ac0cb2
+THREADS=${THREADS:-1}
+V=validation/runs-split-bottom-rate
+BIN_DIR=validation/.bin
+# binary COMMIT: the path of the binary built from COMMIT (built now if missing).
+binary() {
+  local b=$BIN_DIR/rheodem-$1
+  if [ ! -x "$b" ]; then
+    echo "== building rheodem at $1 into $b" >&2
+    local wt
+    wt=$(mktemp -d)/rheodem-$1
+    git worktree add --detach "$wt" "$1" >/dev/null
+    cargo build --release --manifest-path "$wt/Cargo.toml" --target-dir "$wt/target" \
+      -p rheodem-cli >&2
+    mkdir -p "$BIN_DIR"
+    cp "$wt/target/release/rheodem" "$b.tmp" && mv "$b.tmp" "$b"
+    git worktree remove --force "$wt"
+  fi
+  echo "$b"
+}
+mkdir -p "$V"
+common=(--time-step mean-pair --quiet --threads "$THREADS")
+# Ω = 2π f_rot with f_rot = 0.01 /s, the papers' rate.
+OMEGA_PAPER=0.0628318530718
+settle() {
+  if [ ! -f "$V/settled/settled.bin" ]; then
+    echo "== settled"
+    "$(binary $RATE_COMMIT)" split-bottom "${common[@]}" --duration 0.01 --average-from 0 \
+      --out "$V/settled" 2>&1 | tee "$V/settled.log"
+  fi
+}
+# settle_seed SEED: the settled state of another filling, in $V/settled-seedSEED.
+settle_seed() {
+  if [ ! -f "$V/settled-seed$1/settled.bin" ]; then
+    echo "== settled-seed$1"
+    "$(binary $COMMIT)" split-bottom "${common[@]}" --seed "$1" --duration 0.01 \
+      --average-from 0 --out "$V/settled-seed$1" 2>&1 | tee "$V/settled-seed$1.log"
+  fi
+}
+# run BINARY NAME OMEGA FROM_RAD TO_RAD [OPTIONS…]: shear at OMEGA (rad/s) up to the angle
+# TO_RAD, averaged from FROM_RAD, from the settled state ($V/$FROM, default settled). A run
+# that fails is reported and the next one goes on.
+run() {
+  local b=$1 name=$2 omega=$3 from=$4 to=$5; shift 5
+  local duration average_from
+  duration=$(echo "$to / $omega" | bc -l)
+  average_from=$(echo "$from / $omega" | bc -l)
+  echo "== $name (Ω = $omega rad/s, $from–$to rad)"
+  "$b" split-bottom "${common[@]}" --from "$V/${FROM:-settled}" --omega "$omega" \
+    --duration "$duration" --average-from "$average_from" --out "$V/$name" \
+    --config "$V/checkpoints.toml" "$@" 2>&1 | tee "$V/$name.log" \
+    || echo "== $name failed (see $V/$name.log)"
+}
+# Long runs keep 40 checkpoints, so that a kill loses at most 2.5 % of a run.
+printf 'checkpoints = 40\n' > "$V/checkpoints.toml"
+for group in "$@"; do
+  case $group in
+    settle) settle ;;
+    rate)
+      settle
+      for omega in 0.5 0.25 0.125 $OMEGA_PAPER; do
+        run "$(binary $RATE_COMMIT)" "dry-omega$(printf '%.4g' "$omega")" "$omega" 0.5 1.25
+      done ;;
+    bits)
+      settle
+      for c in $RATE_COMMIT $COMMIT; do
+        "$(binary "$c")" split-bottom "${common[@]}" --from "$V/settled" --omega 0.5 \
+          --duration 0.05 --average-from 0.025 --out "/tmp/rheodem-bits-$c" --force >/dev/null
+      done
+      if cmp "/tmp/rheodem-bits-$RATE_COMMIT/timeseries.csv" "/tmp/rheodem-bits-$COMMIT/timeseries.csv"; then
+        echo "== bits: $RATE_COMMIT and $COMMIT give the same dry time series"
+      else
+        echo "== bits: $RATE_COMMIT and $COMMIT DIFFER on a dry run"; exit 1
+      fi ;;
+    wet05)
+      settle
+      for v in 75 0; do
+        run "$(binary $COMMIT)" "wet-g0.02-v$v-omega0.5" 0.5 0.5 1.25 \
+          --law willett --surface-tension 0.02 --volume-nl "$v"
+      done ;;
+    seeds)
+      for seed in 2 3; do
+        settle_seed "$seed"
+        FROM=settled-seed$seed run "$(binary $COMMIT)" "dry-omega0.5-seed$seed" 0.5 0.5 1.25 \
+          --seed "$seed"
+        FROM=settled-seed$seed run "$(binary $COMMIT)" "wet-g0.02-v75-omega0.5-seed$seed" \
+          0.5 0.5 1.25 --seed "$seed" --law willett --surface-tension 0.02 --volume-nl 75
+      done ;;
+    *) echo "unknown group $group (settle, rate, bits, wet05, seeds)" >&2; exit 2 ;;
+  esac
+done
