@@ -404,17 +404,31 @@ fn r7_a_failed_split_bottom_run_says_so_in_its_summary() {
     std::fs::remove_dir_all(&dir).ok();
 }
 
+/// The `--help` text of `command`, its whitespace folded.
+fn help_of(command: &str) -> String {
+    let out = rheodem_in(&std::env::temp_dir(), &[command, "--help"]);
+    String::from_utf8_lossy(&out.stdout)
+        .split_whitespace()
+        .collect::<Vec<_>>()
+        .join(" ")
+}
+
+/// The default `--help` shows for `flag`: the first `[default: …]` after its name.
+fn shown_default<'a>(help: &'a str, flag: &str) -> &'a str {
+    help.split(&format!("{flag} <"))
+        .nth(1)
+        .and_then(|rest| rest.split("[default: ").nth(1))
+        .and_then(|rest| rest.split(']').next())
+        .unwrap_or_else(|| panic!("{flag} shows no default: {help}"))
+}
+
 /// `split-bottom --help` shows the cell's defaults (the values of the library's default
 /// cell, so that the two cannot drift apart) and the allowed ranges.
 #[test]
 fn split_bottom_help_shows_the_defaults() {
     use rheodem::setups::split_bottom::SplitBottomSpec;
     let d = SplitBottomSpec::default();
-    let out = rheodem_in(&std::env::temp_dir(), &["split-bottom", "--help"]);
-    let help: String = String::from_utf8_lossy(&out.stdout)
-        .split_whitespace()
-        .collect::<Vec<_>>()
-        .join(" ");
+    let help = help_of("split-bottom");
     for (flag, value) in [
         ("--omega", d.omega),
         ("--gravity", d.gravity),
@@ -425,14 +439,7 @@ fn split_bottom_help_shows_the_defaults() {
         ("--wedge-deg", d.wedge_deg),
         ("--seed", d.seed as f64),
     ] {
-        // The first default shown after the option's name is its own.
-        let shown = help
-            .split(&format!("{flag} <"))
-            .nth(1)
-            .and_then(|rest| rest.split("[default: ").nth(1))
-            .and_then(|rest| rest.split(']').next())
-            .unwrap_or_else(|| panic!("{flag} shows no default: {help}"));
-        assert_eq!(shown, value.to_string(), "{flag}");
+        assert_eq!(shown_default(&help, flag), value.to_string(), "{flag}");
     }
 }
 
@@ -463,11 +470,7 @@ fn progress_lines_when_not_on_a_terminal() {
 fn shear_box_help_shows_the_defaults() {
     let d: rheodem::setups::shear_box::ShearBoxSpec =
         toml::from_str("mu_p = 0.5\ninertial = 0.1\nsoftness = 0.01").expect("spec");
-    let out = rheodem_in(&std::env::temp_dir(), &["shear-box", "--help"]);
-    let help: String = String::from_utf8_lossy(&out.stdout)
-        .split_whitespace()
-        .collect::<Vec<_>>()
-        .join(" ");
+    let help = help_of("shear-box");
     for (flag, value) in [
         ("--bond", d.bond),
         ("--range", d.range),
@@ -481,14 +484,7 @@ fn shear_box_help_shows_the_defaults() {
         ("--transient-strain", d.transient_strain),
         ("--seed", d.seed as f64),
     ] {
-        // The first default shown after the option's name is its own.
-        let shown = help
-            .split(&format!("{flag} <"))
-            .nth(1)
-            .and_then(|rest| rest.split("[default: ").nth(1))
-            .and_then(|rest| rest.split(']').next())
-            .unwrap_or_else(|| panic!("{flag} shows no default: {help}"));
-        assert_eq!(shown, value.to_string(), "{flag}");
+        assert_eq!(shown_default(&help, flag), value.to_string(), "{flag}");
     }
 }
 
