@@ -22,6 +22,16 @@
 #            0.5–1.25 rad: the references of the wet-excess candidates
 #   seeds  — two more realisations (filling seeds 2 and 3, each settled on its own): dry and
 #            75 nl at Ω = 0.5 over 0.5–1.25 rad, for the scatter of the wet–dry difference
+#   wet0063 — the wet study at the papers' rate, Ω = 0.0628 rad/s over 0.5–1.75 rad: Willett
+#            at 0.020 N/m with 75, 0, 14, 4.2 and 200 nl; 0.01, 0.04 and 0.06 N/m at 75 nl;
+#            the two linear laws equivalent to 75 nl at 0.020 N/m (equal range and equal
+#            energy, `rheodem contact equivalent`: f_a^max = 1.2989e-4 N, k_c = 0.2622 and
+#            0.3879 N/m); and the dry cell over the same window
+#   grains — the wet-excess candidate "radius distribution": the papers' public driver draws
+#            radii uniformly in [1, 2] × 1.1 mm/√2, i.e. w = 2 about a mean diameter of
+#            2.333 mm (rheodem's default: 2.2 mm). A settled state of those grains
+#            ($V/settled-grains, same cell and height), then dry and 75 nl at Ω = 0.5 over
+#            0.5–1.25 rad; every result is scaled with the nominal d_p = 2.2 mm, as the papers'
 set -euo pipefail
 cd "$(dirname "$0")/.."
 RATE_COMMIT=cac761ba48cd
@@ -75,7 +85,7 @@ run() {
   echo "== $name (Ω = $omega rad/s, $from–$to rad)"
   "$b" split-bottom "${common[@]}" --from "$V/${FROM:-settled}" --omega "$omega" \
     --duration "$duration" --average-from "$average_from" --out "$V/$name" \
-    --config "$V/checkpoints.toml" "$@" 2>&1 | tee "$V/$name.log" \
+    --config "${CONFIG:-$V/checkpoints.toml}" "$@" 2>&1 | tee "$V/$name.log" \
     || echo "== $name failed (see $V/$name.log)"
 }
 # Long runs keep 40 checkpoints, so that a kill loses at most 2.5 % of a run.
@@ -113,6 +123,36 @@ for group in "$@"; do
         FROM=settled-seed$seed run "$(binary $COMMIT)" "wet-g0.02-v75-omega0.5-seed$seed" \
           0.5 0.5 1.25 --seed "$seed" --law willett --surface-tension 0.02 --volume-nl 75
       done ;;
-    *) echo "unknown group $group (settle, rate, bits, wet05, seeds)" >&2; exit 2 ;;
+    wet0063)
+      settle
+      # 0.5–1.75 rad at the papers' rate (about 28 s of shear).
+      wet() { run "$(binary $COMMIT)" "$1" $OMEGA_PAPER 0.5 1.75 "${@:2}"; }
+      wet wet-g0.02-v75-omega0.06283 --law willett --surface-tension 0.02 --volume-nl 75
+      wet wet-g0.02-v0-omega0.06283 --law willett --surface-tension 0.02 --volume-nl 0
+      wet dry-omega0.06283-to1.75
+      for v in 14 4.2 200; do
+        wet "wet-g0.02-v$v-omega0.06283" --law willett --surface-tension 0.02 --volume-nl "$v"
+      done
+      for g in 0.01 0.04 0.06; do
+        wet "wet-g$g-v75-omega0.06283" --law willett --surface-tension "$g" --volume-nl 75
+      done
+      wet linear-range-v75-omega0.06283 --law linear --max-force 1.2989e-4 \
+        --adhesive-stiffness 0.2622
+      wet linear-energy-v75-omega0.06283 --law linear --max-force 1.2989e-4 \
+        --adhesive-stiffness 0.3879 ;;
+    grains)
+      printf 'checkpoints = 40\ndiameter = 2.3333333333333333e-3\n' > "$V/grains.toml"
+      if [ ! -f "$V/settled-grains/settled.bin" ]; then
+        echo "== settled-grains"
+        "$(binary $COMMIT)" split-bottom "${common[@]}" --config "$V/grains.toml" \
+          --duration 0.01 --average-from 0 --out "$V/settled-grains" 2>&1 \
+          | tee "$V/settled-grains.log"
+      fi
+      export FROM=settled-grains CONFIG=$V/grains.toml
+      run "$(binary $COMMIT)" dry-omega0.5-grains 0.5 0.5 1.25
+      run "$(binary $COMMIT)" wet-g0.02-v75-omega0.5-grains 0.5 0.5 1.25 --law willett \
+        --surface-tension 0.02 --volume-nl 75
+      unset FROM CONFIG ;;
+    *) echo "unknown group $group (settle, rate, bits, wet05, seeds, wet0063, grains)" >&2; exit 2 ;;
   esac
 done

@@ -199,6 +199,13 @@ fn bad_geometry_gets_specific_errors() {
         ),
         (
             SplitBottomSpec {
+                wall_shell: -0.5,
+                ..base.clone()
+            },
+            "`wall_shell` = -0.5: must lie in [0, 5]",
+        ),
+        (
+            SplitBottomSpec {
                 wedge_deg: 5.0,
                 ..base.clone()
             },
@@ -439,4 +446,49 @@ fn dry_spring_energy_is_the_elastic_energy() {
     assert!(c.elastic_energy > 0.0);
     assert_eq!(c.spring_energy.to_bits(), c.elastic_energy.to_bits());
     std::fs::remove_dir_all(&dir).ok();
+}
+
+/// `wall_shell` freezes the same settled packing deeper: the filling and settling are
+/// unchanged (the same positions, bit for bit), every wall particle of the default (the
+/// layer touching the mould) stays one, and no free grain keeps its centre inside the shell.
+#[test]
+fn a_thicker_wall_shell_freezes_the_same_packing_deeper() {
+    let settle = |shell: f64, name: &str| {
+        let dir = tmp(name);
+        let spec = SplitBottomSpec {
+            wall_shell: shell,
+            ..small()
+        };
+        let mut run = SplitBottomRun::start(spec, &dir, false).expect("start");
+        run.advance_stage(&dir, &mut |_, _, _| {}).expect("settle");
+        std::fs::remove_dir_all(&dir).ok();
+        run
+    };
+    let (thin, thick) = (settle(0.0, "shell-0"), settle(1.1, "shell-1.1"));
+    assert_eq!(positions(&thin), positions(&thick));
+    let frozen = |run: &SplitBottomRun| {
+        let p = &run.simulation.particles;
+        p.slot_of()
+            .iter()
+            .map(|&s| !p.motion[s as usize].is_free())
+            .collect::<Vec<bool>>()
+    };
+    let (a, b) = (frozen(&thin), frozen(&thick));
+    assert!(a.iter().zip(&b).all(|(&a, &b)| !a || b));
+    let (na, nb) = (
+        a.iter().filter(|&&f| f).count(),
+        b.iter().filter(|&&f| f).count(),
+    );
+    assert!(nb > na + na / 4, "{na} wall particles, {nb} with the shell");
+    let g = &thick.geometry;
+    let shell = 1.1 * thick.spec.diameter;
+    let p = &thick.simulation.particles;
+    for i in (0..p.len()).filter(|&i| p.motion[i].is_free()) {
+        let r = p.position[i];
+        let rho = r.x.hypot(r.y);
+        assert!(
+            r.z >= shell && rho >= g.inner_radius + shell && rho <= g.outer_radius - shell,
+            "a free grain inside the shell at {r:?}"
+        );
+    }
 }

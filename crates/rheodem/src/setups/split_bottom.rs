@@ -148,6 +148,11 @@ pub struct SplitBottomSpec {
     pub snapshots: u64,
     /// Checkpoints over the shear stage (besides the final one).
     pub checkpoints: u64,
+    /// Thickness of the frozen wall shell in units of `d_p`: besides the layer touching the
+    /// mould, the particles whose centres lie within this distance inside the cell's walls
+    /// (`R_i`, `R_o` and the floor `z = 0`) become wall particles; 0: that layer alone.
+    /// The source papers' public driver freezes 2.2 radii, 1.1 here.
+    pub wall_shell: f64,
     /// Verlet skin in units of `d_p`.
     pub skin: f64,
     /// Random seed of the filling.
@@ -192,6 +197,7 @@ impl Default for SplitBottomSpec {
             rows: 200,
             snapshots: 4,
             checkpoints: 8,
+            wall_shell: 0.0,
             skin: 0.1,
             seed: 1,
             cg_kernel: KernelShape::Lucy,
@@ -599,6 +605,13 @@ impl SplitBottomSpec {
         non_negative("gravity", self.gravity)?;
         positive("settle_damping", self.settle_damping)?;
         positive("skin", self.skin)?;
+        if !(self.wall_shell.is_finite() && (0.0..=5.0).contains(&self.wall_shell)) {
+            return Err(invalid(
+                "wall_shell",
+                self.wall_shell,
+                "must lie in [0, 5] particle diameters",
+            ));
+        }
         positive("cg_width", self.cg_width)?;
         positive("cg_spacing", self.cg_spacing)?;
         non_negative("cg_every", self.cg_every)?;
@@ -975,6 +988,7 @@ impl SplitBottomRun {
             ("density", s.density, o.density),
             ("gravity", s.gravity, o.gravity),
             ("seed", s.seed as f64, o.seed as f64),
+            ("wall_shell", s.wall_shell, o.wall_shell),
         ] {
             same(key, a, b)?;
         }
@@ -1209,9 +1223,11 @@ impl SplitBottomRun {
             })
     }
 
-    /// Freezes the layer of particles touching each mould wall into the rough walls.
+    /// Freezes the layer of particles touching each mould wall, and those whose centres lie
+    /// in the wall shell (`wall_shell`), into the rough walls.
     fn freeze_walls(&mut self, kinetic_ratio: f64, criterion_met: bool) -> Result<(), RunError> {
         let g = self.geometry.clone();
+        let shell = self.spec.wall_shell * self.spec.diameter;
         let p = &mut self.simulation.particles;
         let touch = 0.1 * g.radii[0];
         let mut counts = [0usize; 4];
@@ -1220,15 +1236,15 @@ impl SplitBottomRun {
                 continue;
             }
             let (r, a) = (p.position[i], p.radius[i]);
-            let part = if r.z - a - g.floor < touch {
+            let part = if r.z - a - g.floor < touch || r.z < shell {
                 if rho(r) < g.split_radius {
                     INNER_BOTTOM
                 } else {
                     OUTER_BOTTOM
                 }
-            } else if rho(r) - a - g.mould_inner < touch {
+            } else if rho(r) - a - g.mould_inner < touch || rho(r) < g.inner_radius + shell {
                 INNER_WALL
-            } else if g.mould_outer - rho(r) - a < touch {
+            } else if g.mould_outer - rho(r) - a < touch || rho(r) > g.outer_radius - shell {
                 OUTER_WALL
             } else {
                 continue;
