@@ -32,10 +32,16 @@
 #            2.333 mm (rheodem's default: 2.2 mm). A settled state of those grains
 #            ($V/settled-grains, same cell and height), then dry and 75 nl at Ω = 0.5 over
 #            0.5–1.25 rad; every result is scaled with the nominal d_p = 2.2 mm, as the papers'
+#   shell  — the wet-excess candidate "wall construction": the settled state of seed 1
+#            re-made by $SHELL_COMMIT with wall_shell = 1.1 (the papers' driver's 2.2 radii;
+#            the same packing, frozen deeper: its settle rows must equal those of
+#            $V/settled), then dry and 75 nl at Ω = 0.5 over 0.5–1.25 rad
 set -euo pipefail
 cd "$(dirname "$0")/.."
 RATE_COMMIT=cac761ba48cd
 COMMIT=75dfb0ac0cb2
+# The first commit with the key wall_shell (the group shell).
+SHELL_COMMIT=9ef5d50249a6
 THREADS=${THREADS:-1}
 V=validation/runs-split-bottom-rate
 BIN_DIR=validation/.bin
@@ -87,6 +93,23 @@ run() {
     --duration "$duration" --average-from "$average_from" --out "$V/$name" \
     --config "${CONFIG:-$V/checkpoints.toml}" "$@" 2>&1 | tee "$V/$name.log" \
     || echo "== $name failed (see $V/$name.log)"
+}
+# variant_settle NAME BINARY KEY_LINE: the settled state of seed 1 in a cell changed by one
+# key (written with the checkpoints' key to $V/NAME.toml), in $V/settled-NAME.
+variant_settle() {
+  printf 'checkpoints = 40\n%s\n' "$3" > "$V/$1.toml"
+  if [ ! -f "$V/settled-$1/settled.bin" ]; then
+    echo "== settled-$1"
+    "$2" split-bottom "${common[@]}" --config "$V/$1.toml" --duration 0.01 \
+      --average-from 0 --out "$V/settled-$1" 2>&1 | tee "$V/settled-$1.log"
+  fi
+}
+# variant_runs NAME BINARY: dry and 75 nl at 0.020 N/m, Ω = 0.5 over 0.5–1.25 rad, from
+# $V/settled-NAME.
+variant_runs() {
+  FROM=settled-$1 CONFIG=$V/$1.toml run "$2" "dry-omega0.5-$1" 0.5 0.5 1.25
+  FROM=settled-$1 CONFIG=$V/$1.toml run "$2" "wet-g0.02-v75-omega0.5-$1" 0.5 0.5 1.25 \
+    --law willett --surface-tension 0.02 --volume-nl 75
 }
 # Long runs keep 40 checkpoints, so that a kill loses at most 2.5 % of a run.
 printf 'checkpoints = 40\n' > "$V/checkpoints.toml"
@@ -141,18 +164,18 @@ for group in "$@"; do
       wet linear-energy-v75-omega0.06283 --law linear --max-force 1.2989e-4 \
         --adhesive-stiffness 0.3879 ;;
     grains)
-      printf 'checkpoints = 40\ndiameter = 2.3333333333333333e-3\n' > "$V/grains.toml"
-      if [ ! -f "$V/settled-grains/settled.bin" ]; then
-        echo "== settled-grains"
-        "$(binary $COMMIT)" split-bottom "${common[@]}" --config "$V/grains.toml" \
-          --duration 0.01 --average-from 0 --out "$V/settled-grains" 2>&1 \
-          | tee "$V/settled-grains.log"
+      variant_settle grains "$(binary $COMMIT)" 'diameter = 2.3333333333333333e-3'
+      variant_runs grains "$(binary $COMMIT)" ;;
+    shell)
+      settle
+      variant_settle shell "$(binary $SHELL_COMMIT)" 'wall_shell = 1.1'
+      if cmp <(grep ',settle,' "$V/settled/timeseries.csv") \
+        <(grep ',settle,' "$V/settled-shell/timeseries.csv"); then
+        echo "== shell: the same settling as $V/settled"
+      else
+        echo "== shell: the settling DIFFERS from $V/settled"; exit 1
       fi
-      export FROM=settled-grains CONFIG=$V/grains.toml
-      run "$(binary $COMMIT)" dry-omega0.5-grains 0.5 0.5 1.25
-      run "$(binary $COMMIT)" wet-g0.02-v75-omega0.5-grains 0.5 0.5 1.25 --law willett \
-        --surface-tension 0.02 --volume-nl 75
-      unset FROM CONFIG ;;
-    *) echo "unknown group $group (settle, rate, bits, wet05, seeds, wet0063, grains)" >&2; exit 2 ;;
+      variant_runs shell "$(binary $SHELL_COMMIT)" ;;
+    *) echo "unknown group $group (settle, rate, bits, wet05, seeds, wet0063, grains, shell)" >&2; exit 2 ;;
   esac
 done

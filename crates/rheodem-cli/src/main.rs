@@ -114,6 +114,11 @@ enum Command {
         /// Write the figures (PNG and SVG) into this directory.
         #[arg(long)]
         figures: Option<PathBuf>,
+        /// The band friction μ held fixed for every run in the comparisons at one friction
+        /// and in c_eq* from the torque (Eq. 27), ≥ 0; the papers hold 0.15 [default: the
+        /// dry run's at the same Ω and g, else 0.15]
+        #[arg(long)]
+        mu: Option<f64>,
     },
     /// Studies: a sweep with a report and a quick variant (run here or submit to Slurm,
     /// status, collect, report).
@@ -423,7 +428,9 @@ fn run(cli: Cli) -> Result<()> {
         Command::Contact(cmd) => contact::run(cmd),
         Command::Predict(args) => predict::run(&args),
         Command::Fit { dir } => shear::fit(&dir),
-        Command::WetStudy { dirs, figures } => split_bottom::wet_study(&dirs, figures.as_deref()),
+        Command::WetStudy { dirs, figures, mu } => {
+            split_bottom::wet_study(&dirs, figures.as_deref(), mu)
+        }
         Command::ShearBox(args) => shear::shear_box(args),
         Command::Sweep {
             file,

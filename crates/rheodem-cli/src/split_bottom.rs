@@ -337,9 +337,15 @@ pub fn run(args: SplitBottomArgs) -> Result<()> {
 }
 
 /// Runs `wet-study`: the runs found in `dirs` (each a run directory, or a directory of
-/// them), their fits as markdown, the figures into `figures`.
-pub fn wet_study(dirs: &[PathBuf], figures: Option<&Path>) -> Result<()> {
+/// them), their fits as markdown (at the band friction `mu` where one is held fixed), the
+/// figures into `figures`.
+pub fn wet_study(dirs: &[PathBuf], figures: Option<&Path>, mu: Option<f64>) -> Result<()> {
     use rheodem::setups::wet_study::{WetRun, wet_study};
+    if let Some(mu) = mu
+        && !(mu.is_finite() && mu >= 0.0)
+    {
+        bail!("--mu {mu}: the band friction must be a finite number ≥ 0");
+    }
     let mut runs = Vec::new();
     let mut left_out = Vec::new();
     for dir in dirs {
@@ -375,7 +381,8 @@ pub fn wet_study(dirs: &[PathBuf], figures: Option<&Path>) -> Result<()> {
             }
         );
     }
-    let study = wet_study(&runs).map_err(|e| anyhow::anyhow!("cannot draw the figures: {e}"))?;
+    let study =
+        wet_study(&runs, mu).map_err(|e| anyhow::anyhow!("cannot draw the figures: {e}"))?;
     print!("{}", study.markdown);
     if !left_out.is_empty() {
         println!("\nLeft out:\n- {}", left_out.join("\n- "));

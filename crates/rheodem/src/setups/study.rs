@@ -271,7 +271,7 @@ pub fn split_bottom_report(
     let mut figures = Vec::new();
     if !runs.is_empty() {
         let _ = writeln!(md, "## The runs and the relations of Roy et al. 2016\n");
-        let wet = super::wet_study::wet_study(&runs)?;
+        let wet = super::wet_study::wet_study(&runs, None)?;
         md += &wet.markdown;
         figures = wet.figures;
         md += &figure_links(&figures);

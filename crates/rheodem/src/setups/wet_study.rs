@@ -64,6 +64,10 @@ pub struct WetRun {
     pub adhesion: Adhesion,
     /// Rotation rate `Ω` (rad/s) and gravity `g` (m/s²): runs are compared at equal ones.
     pub omega_gravity: (f64, f64),
+    /// How the cell differs from the default one (`d_p` 2.2 mm, `w` 2, the wall layer
+    /// touching the mould), e.g. "d_p 2.333 mm"; empty for the default. Runs are compared
+    /// in equal cells only.
+    pub cell: String,
     /// `S_c* = S_c/d_p` (0 when dry).
     pub rupture: f64,
     /// `γ*` (0 when dry; the equivalent for the linear law).
@@ -80,6 +84,11 @@ pub struct WetRun {
     pub torque_macro: f64,
     /// Mean pressure of the fitted band points, `P_avg* = P_avg d_p²/f_g`.
     pub pressure: f64,
+    /// The band's torque factor `M* = M/d_p³` (Eq. 26).
+    pub torque_factor: f64,
+    /// The settled state the run sheared from (`--from`), if any: runs from one settled
+    /// state are paired wet against dry.
+    pub from: Option<String>,
 }
 
 impl WetRun {
@@ -93,12 +102,51 @@ impl WetRun {
             self.cohesion.1,
         )
     }
+
+    /// `c_eq* = T*/M* − μ P_avg*` (Eq. 27) at the friction `mu`: the cohesion the wall
+    /// torque implies when the band's friction is `mu`.
+    pub fn cohesion_from_torque_at(&self, mu: f64) -> f64 {
+        self.torque.0 / self.torque_factor - mu * self.pressure
+    }
+
+    /// Whether `other` ran at the same `Ω` and `g` in the same cell.
+    pub fn comparable(&self, other: &WetRun) -> bool {
+        self.omega_gravity == other.omega_gravity && self.cell == other.cell
+    }
+
+    /// `Ω, g` and the cell, for a table.
+    fn conditions(&self) -> String {
+        let (w, g) = self.omega_gravity;
+        if self.cell.is_empty() {
+            format!("{w}, {g}")
+        } else {
+            format!("{w}, {g}, {}", self.cell)
+        }
+    }
+}
+
+/// How the cell of `spec` differs from the default one (empty if it does not).
+fn cell_label(spec: &SplitBottomSpec) -> String {
+    let base = SplitBottomSpec::default();
+    let mut parts = Vec::new();
+    if spec.diameter != base.diameter {
+        parts.push(format!("d_p {:.4} mm", spec.diameter * 1e3));
+    }
+    if spec.w != base.w {
+        parts.push(format!("w {}", spec.w));
+    }
+    if spec.wall_shell != base.wall_shell {
+        parts.push(format!("wall shell {} d_p", spec.wall_shell));
+    }
+    parts.join(", ")
 }
 
 /// The parts of `summary.json` the study reads.
 #[derive(Deserialize)]
 struct RunSummary {
     spec: SplitBottomSpec,
+    #[serde(default)]
+    from: Option<String>,
     groups: Groups,
     results: Option<TorqueResults>,
     band_rheology: Option<BandSummary>,
@@ -161,6 +209,7 @@ impl WetRun {
             name,
             adhesion,
             omega_gravity: (s.spec.omega, s.spec.gravity),
+            cell: cell_label(&s.spec),
             rupture: if adhesion == Adhesion::Dry {
                 0.0
             } else {
@@ -173,6 +222,8 @@ impl WetRun {
             torque: (torque.mean / (fg * d), torque.error / (fg * d)),
             torque_macro: band.torque_macro.unwrap_or(f64::NAN) / (fg * d),
             pressure: band.pressure_avg * stress,
+            torque_factor: band.torque_factor / (d * d * d),
+            from: s.from,
         })
     }
 }
@@ -220,12 +271,9 @@ pub fn fit_line(points: &[(f64, f64, f64)], through_origin: bool) -> Option<Line
     })
 }
 
-/// The Willett runs at one `(Ω, g)` grouped by the value of `key`, ascending.
-fn willett_groups(
-    runs: &[WetRun],
-    key: fn(f64, f64) -> f64,
-) -> Vec<((f64, f64), f64, Vec<&WetRun>)> {
-    let mut groups: Vec<((f64, f64), f64, Vec<&WetRun>)> = Vec::new();
+/// The Willett runs at one `(Ω, g)` and cell grouped by the value of `key`, ascending.
+fn willett_groups(runs: &[WetRun], key: fn(f64, f64) -> f64) -> Vec<(f64, Vec<&WetRun>)> {
+    let mut groups: Vec<(f64, Vec<&WetRun>)> = Vec::new();
     for r in runs {
         let Adhesion::Willett {
             volume,
@@ -237,13 +285,13 @@ fn willett_groups(
         let value = key(volume, surface_tension);
         match groups
             .iter_mut()
-            .find(|g| g.0 == r.omega_gravity && g.1 == value)
+            .find(|g| g.1[0].comparable(r) && g.0 == value)
         {
-            Some(g) => g.2.push(r),
-            None => groups.push((r.omega_gravity, value, vec![r])),
+            Some(g) => g.1.push(r),
+            None => groups.push((value, vec![r])),
         }
     }
-    groups.sort_by(|a, b| a.1.total_cmp(&b.1));
+    groups.sort_by(|a, b| a.0.total_cmp(&b.0));
     groups
 }
 
@@ -260,8 +308,146 @@ fn pm((v, e): (f64, f64)) -> String {
     format!("{v:.3} ± {e:.3}")
 }
 
-/// Fits the papers' relations to `runs` and draws their figures.
-pub fn wet_study(runs: &[WetRun]) -> Result<WetStudy, String> {
+/// The friction held fixed for the runs comparable with `run`: `mu` if given, else the
+/// dry run's at the same `Ω`, `g` in the same cell, else the papers' 0.15.
+fn friction(runs: &[WetRun], run: &WetRun, mu: Option<f64>) -> f64 {
+    mu.unwrap_or_else(|| {
+        runs.iter()
+            .find(|r| r.adhesion == Adhesion::Dry && r.comparable(run))
+            .map_or(paper::MU, |r| r.mu.0)
+    })
+}
+
+/// Eq. 20 over a group of Willett runs at one surface tension: `y = c*₀ + a S_c*` with `y`
+/// and its error from `value`. With a 0 nl run in the group, `c*₀` is its value (the
+/// papers' definition) and the line goes through it, with the errors of both points added
+/// in quadrature; otherwise `c*₀` is the fitted intercept.
+fn rupture_line(members: &[&WetRun], value: impl Fn(&WetRun) -> (f64, f64)) -> Option<Line> {
+    let zero = members.iter().find(|r| r.rupture == 0.0).map(|r| value(r));
+    let pts: Vec<(f64, f64, f64)> = members
+        .iter()
+        .filter(|r| zero.is_none() || r.rupture > 0.0)
+        .map(|r| {
+            let (y, e) = value(r);
+            match zero {
+                Some((y0, e0)) => (r.rupture, y - y0, e.hypot(e0)),
+                None => (r.rupture, y, e),
+            }
+        })
+        .collect();
+    let mut line = fit_line(&pts, zero.is_some())?;
+    if let Some(z) = zero {
+        line.intercept = z;
+    }
+    Some(line)
+}
+
+/// The wet–dry differences of runs sheared from one settled state at one `(Ω, g)`: the
+/// torque's, `Δc* = ΔT*/M*` (the friction unchanged), and the band fits' at the dry run's
+/// friction (or `mu`); then their mean over the realisations of each law, with the
+/// standard error of the mean, against the papers' `c*` at 75 nl, 0.020 N/m.
+fn wet_against_dry(md: &mut String, runs: &[WetRun], mu: Option<f64>) {
+    let pairs: Vec<(&WetRun, &WetRun)> = runs
+        .iter()
+        .filter(|w| w.adhesion != Adhesion::Dry && w.from.is_some())
+        .filter_map(|w| {
+            runs.iter()
+                .find(|d| d.adhesion == Adhesion::Dry && d.from == w.from && d.comparable(w))
+                .map(|d| (w, d))
+        })
+        .collect();
+    if pairs.is_empty() {
+        return;
+    }
+    let _ = writeln!(
+        md,
+        "\n## Wet against dry from the same settled state\n\n\
+         `Δc*` from the torque is `ΔT*/M*`, the friction unchanged; from the band fits it is \
+         `c*(μ)` of the wet run less the dry run's, at the dry run's `μ`{}.\n\n\
+         | wet run | dry run | Ω, g | ΔT* | Δc* from the torque | Δc* from the band fits |\n\
+         |---|---|---|---|---|---|",
+        mu.map_or(String::new(), |m| format!(" (here `--mu` {m})"))
+    );
+    let mut laws: Vec<(&WetRun, Vec<(f64, f64)>)> = Vec::new();
+    for (w, d) in &pairs {
+        let dt = (w.torque.0 - d.torque.0, w.torque.1.hypot(d.torque.1));
+        let m = w.torque_factor;
+        let from_torque = (dt.0 / m, dt.1 / m);
+        let mu = mu.unwrap_or(d.mu.0);
+        let (cw, ew) = w.cohesion_at(mu);
+        let (cd, ed) = d.cohesion_at(mu);
+        let _ = writeln!(
+            md,
+            "| {} | {} | {} | {:.4e} ± {:.1e} | {} | {} |",
+            w.name,
+            d.name,
+            w.conditions(),
+            dt.0,
+            dt.1,
+            pm(from_torque),
+            pm((cw - cd, ew.hypot(ed)))
+        );
+        match laws
+            .iter_mut()
+            .find(|l| l.0.adhesion == w.adhesion && l.0.comparable(w))
+        {
+            Some(l) => l.1.push((from_torque.0, cw - cd)),
+            None => laws.push((w, vec![(from_torque.0, cw - cd)])),
+        }
+    }
+    let _ = writeln!(
+        md,
+        "\nOver the realisations (mean ± standard error of the mean; the papers' `c*` at \
+         75 nl, 0.020 N/m: {}):\n\n\
+         | adhesion | Ω, g | pairs | Δc* from the torque | Δc* from the band fits |\n\
+         |---|---|---|---|---|",
+        paper::C_75NL
+    );
+    for (run, values) in &laws {
+        let name = match run.adhesion {
+            Adhesion::Willett {
+                volume,
+                surface_tension,
+            } => format!("Willett {} nl, {surface_tension} N/m", volume * 1e12),
+            Adhesion::Linear => "linear irreversible".into(),
+            Adhesion::Dry => continue,
+        };
+        let column = |k: usize| {
+            let x: Vec<f64> = values
+                .iter()
+                .map(|v| if k == 0 { v.0 } else { v.1 })
+                .collect();
+            match mean_and_error(&x) {
+                Some(e) => pm(e),
+                None => format!("{:.3}", x[0]),
+            }
+        };
+        let _ = writeln!(
+            md,
+            "| {name} | {} | {} | {} | {} |",
+            run.conditions(),
+            values.len(),
+            column(0),
+            column(1)
+        );
+    }
+}
+
+/// The mean of `x` and its standard error, `None` for fewer than two values.
+fn mean_and_error(x: &[f64]) -> Option<(f64, f64)> {
+    let n = x.len();
+    if n < 2 {
+        return None;
+    }
+    let mean = x.iter().sum::<f64>() / n as f64;
+    let var = x.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (n - 1) as f64;
+    Some((mean, (var / n as f64).sqrt()))
+}
+
+/// Fits the papers' relations to `runs` and draws their figures. `mu` fixes the band's
+/// friction of every run for the comparisons at one friction (default: the dry run's at
+/// the same `Ω`, `g`, else the papers' 0.15).
+pub fn wet_study(runs: &[WetRun], mu: Option<f64>) -> Result<WetStudy, String> {
     let mut md = String::new();
     let mut figures = Vec::new();
     let _ = writeln!(
@@ -295,33 +481,26 @@ pub fn wet_study(runs: &[WetRun]) -> Result<WetStudy, String> {
         );
     }
 
-    // Eq. 20 (Fig. 8a): c* = c*₀ + a S_c* at each surface tension; c*₀ is the V_b → 0 limit.
+    // Eq. 20 (Fig. 8a): c* = c*₀ + a S_c* at each surface tension.
     let _ = writeln!(
         md,
         "\n## Cohesion against the rupture distance (Eq. 20, Fig. 8a)\n\n\
          `c* = c*₀ + a S_c*` over the bridge volumes at one surface tension; the papers give \
-         `a` = {} at 0.020 N/m. Also `c_eq*` from the torque (Eq. 27), and Eq. 23's \
-         `p = a/γ*` (papers {}) and Eq. 28's `e` (papers {}).\n\n\
-         | γ_s (N/m) | Ω, g | volumes | c*₀ | a | max residual | p = a/γ* | c_eq*₀ | slope of c_eq* | e = slope/γ* |\n\
-         |---|---|---|---|---|---|---|---|---|---|",
+         `a` = {} at 0.020 N/m. `c*₀` is the 0 nl run's (Willett's contact-only limit, as the \
+         papers) when the group has one, the line's fitted intercept otherwise. Eq. 23's \
+         `p = a/γ*`: papers {}. The band fits' own `μ`:\n\n\
+         | γ_s (N/m) | Ω, g | volumes | c*₀ | a | max residual | p = a/γ* |\n\
+         |---|---|---|---|---|---|---|",
         paper::A_AT_0_020,
         paper::P,
-        paper::E
     );
     let mut rupture_groups = Vec::new();
-    for ((w, g), gamma_s, members) in willett_groups(runs, |_, s| s) {
-        let pts: Vec<(f64, f64, f64)> = members
-            .iter()
-            .map(|r| (r.rupture, r.cohesion.0, r.cohesion.1))
-            .collect();
-        let eq: Vec<(f64, f64, f64)> = members
-            .iter()
-            .map(|r| (r.rupture, r.cohesion_from_torque, r.cohesion.1))
-            .collect();
-        let (Some(line), Some(eq_line)) = (fit_line(&pts, false), fit_line(&eq, false)) else {
+    for (gamma_s, members) in willett_groups(runs, |_, s| s) {
+        let at = members[0].conditions();
+        let Some(line) = rupture_line(&members, |r| r.cohesion) else {
             let _ = writeln!(
                 md,
-                "| {gamma_s} | {w}, {g} | {} | (too few volumes to fit) |||||||",
+                "| {gamma_s} | {at} | {} | (too few volumes to fit) ||||",
                 members.len()
             );
             continue;
@@ -329,55 +508,55 @@ pub fn wet_study(runs: &[WetRun]) -> Result<WetStudy, String> {
         let gamma = members[0].tension;
         let _ = writeln!(
             md,
-            "| {gamma_s} | {w}, {g} | {} | {} | {} | {:.3} | {:.2} | {:.3} | {:.3} | {:.2} |",
-            line.points,
+            "| {gamma_s} | {at} | {} | {} | {} | {:.3} | {:.2} |",
+            members.len(),
             pm(line.intercept),
             pm(line.slope),
             line.max_residual,
             line.slope.0 / gamma,
-            eq_line.intercept.0,
-            eq_line.slope.0,
-            eq_line.slope.0 / gamma
         );
         rupture_groups.push((gamma_s, gamma, line, members));
     }
-    // The same at one friction for all runs (the dry run's at that Ω, g, else the papers'
-    // 0.15): the fitted μ falls with the volume, and c rises with it in the free fits.
+    // The same at one friction for all runs: the fitted μ falls with the volume, and c
+    // rises with it in the free fits. Also c_eq* from the torque (Eq. 27) at that μ, and
+    // Eq. 28's e.
     let _ = writeln!(
         md,
-        "\nWith `μ` fixed for every run of a group at the dry run's (same `Ω`, `g`; the \
-         papers' {} without one), `c*(μ) = c* + (μ_fit − μ) P_avg*`:\n\n\
-         | γ_s (N/m) | Ω, g | μ | volumes | c*₀ | a | max residual | p = a/γ* |\n\
-         |---|---|---|---|---|---|---|---|",
-        paper::MU
+        "\nWith `μ` fixed for every run of a group ({}), `c*(μ) = c* + (μ_fit − μ) P_avg*`, \
+         and `c_eq* = T*/M* − μ P_avg*` from the wall torque (Eq. 27); Eq. 28's \
+         `e = slope/γ*`: papers {}:\n\n\
+         | γ_s (N/m) | Ω, g | μ | volumes | c*₀ | a | max residual | p = a/γ* | c_eq*₀ | slope of c_eq* | e |\n\
+         |---|---|---|---|---|---|---|---|---|---|---|",
+        match mu {
+            Some(mu) => format!("`--mu` {mu}"),
+            None => format!(
+                "the dry run's at the same `Ω`, `g`, else the papers' {}",
+                paper::MU
+            ),
+        },
+        paper::E
     );
     for (gamma_s, gamma, _, members) in &rupture_groups {
-        let og = members[0].omega_gravity;
-        let mu = runs
-            .iter()
-            .find(|r| r.adhesion == Adhesion::Dry && r.omega_gravity == og)
-            .map_or(paper::MU, |r| r.mu.0);
-        let pts: Vec<(f64, f64, f64)> = members
-            .iter()
-            .map(|r| {
-                let (c, e) = r.cohesion_at(mu);
-                (r.rupture, c, e)
-            })
-            .collect();
-        if let Some(line) = fit_line(&pts, false) {
+        let mu = friction(runs, members[0], mu);
+        let at_mu = rupture_line(members, |r| r.cohesion_at(mu));
+        let from_torque = rupture_line(members, |r| (r.cohesion_from_torque_at(mu), r.cohesion.1));
+        if let (Some(line), Some(eq)) = (at_mu, from_torque) {
             let _ = writeln!(
                 md,
-                "| {gamma_s} | {}, {} | {mu:.4} | {} | {} | {} | {:.3} | {:.2} |",
-                og.0,
-                og.1,
-                line.points,
+                "| {gamma_s} | {} | {mu:.4} | {} | {} | {} | {:.3} | {:.2} | {:.3} | {:.3} | {:.2} |",
+                members[0].conditions(),
+                members.len(),
                 pm(line.intercept),
                 pm(line.slope),
                 line.max_residual,
-                line.slope.0 / gamma
+                line.slope.0 / gamma,
+                eq.intercept.0,
+                eq.slope.0,
+                eq.slope.0 / gamma
             );
         }
     }
+    wet_against_dry(&mut md, runs, mu);
     if !rupture_groups.is_empty() {
         let top = runs.iter().map(|r| r.rupture).fold(0.0, f64::max) * 1.05;
         let groups: Vec<Group> = rupture_groups
@@ -448,7 +627,8 @@ pub fn wet_study(runs: &[WetRun]) -> Result<WetStudy, String> {
         paper::T
     );
     let mut tension_groups = Vec::new();
-    for ((w, g), volume, members) in willett_groups(runs, |v, _| v) {
+    for (volume, members) in willett_groups(runs, |v, _| v) {
+        let at = members[0].conditions();
         let pts: Vec<(f64, f64, f64)> = members
             .iter()
             .map(|r| (r.tension, r.cohesion.0, r.cohesion.1))
@@ -477,7 +657,7 @@ pub fn wet_study(runs: &[WetRun]) -> Result<WetStudy, String> {
             (Some(b), Some(log), Some(t)) => {
                 let _ = writeln!(
                     md,
-                    "| {nl:.0} | {w}, {g} | {} | {} | {} | {} | {:.3e} | {:.3e} |",
+                    "| {nl:.0} | {at} | {} | {} | {} | {} | {:.3e} | {:.3e} |",
                     b.points,
                     pm(b.slope),
                     pm(log.slope),
@@ -490,7 +670,7 @@ pub fn wet_study(runs: &[WetRun]) -> Result<WetStudy, String> {
             _ => {
                 let _ = writeln!(
                     md,
-                    "| {nl:.0} | {w}, {g} | {} | (too few tensions to fit) |||||",
+                    "| {nl:.0} | {at} | {} | (too few tensions to fit) |||||",
                     members.len()
                 );
             }
@@ -599,6 +779,7 @@ mod tests {
                 surface_tension: gamma_s,
             },
             omega_gravity: (0.5, 9.81),
+            cell: String::new(),
             rupture: 1.1745 * (volume_nl * 1e-12f64).cbrt() / 2.2e-3,
             tension: gamma_s * 2.2e-3 / 1.0939e-4,
             mu: (0.15, 0.002),
@@ -607,6 +788,9 @@ mod tests {
             torque: (torque, 100.0),
             torque_macro: torque,
             pressure: 11.0,
+            // T*/M* − 0.15 P* = c at the papers' friction.
+            torque_factor: torque / (c + 0.15 * 11.0),
+            from: Some("settled".into()),
         }
     }
 
@@ -660,7 +844,7 @@ mod tests {
             runs.push(r);
         }
         // The 75 nl, 0.020 N/m run on Eq. 22 as well: c0 + a S_c* = b γ* there.
-        let study = wet_study(&runs).expect("study");
+        let study = wet_study(&runs, None).expect("study");
         let md = &study.markdown;
         assert!(
             md.contains("| 0.02 | 0.5, 9.81 | 3 | 0.050 ± 0.000 | 0.980 ± 0.000 | 0.000 | 2.44 |"),
@@ -688,5 +872,69 @@ mod tests {
                 "torque-macro-vs-wall"
             ]
         );
+    }
+
+    /// A 0 nl run is the papers' `c*₀`: the line goes through it, whatever the other
+    /// volumes' intercept; `c_eq*` from the torque at the fixed friction gives Eq. 28's `e`.
+    #[test]
+    fn the_zero_volume_run_anchors_the_cohesion_line() {
+        let mut runs = Vec::new();
+        for (k, nl) in [0.0, 14.0, 75.0, 200.0].into_iter().enumerate() {
+            let mut r = run(&format!("v{k}"), nl, 0.02, 0.0, 6e5);
+            r.cohesion.0 = if nl == 0.0 {
+                0.07
+            } else {
+                0.07 + 1.2 * r.rupture
+            };
+            r.torque_factor = r.torque.0 / (r.cohesion.0 + 0.15 * r.pressure);
+            runs.push(r);
+        }
+        let md = wet_study(&runs, Some(0.15)).expect("study").markdown;
+        let gamma = runs[0].tension;
+        let free = format!(
+            "| 0.02 | 0.5, 9.81 | 4 | 0.070 ± 0.010 | 1.200 ± 0.000 | 0.000 | {:.2} |",
+            1.2 / gamma
+        );
+        assert!(md.contains(&free), "{md}");
+        let fixed = format!(
+            "| 0.02 | 0.5, 9.81 | 0.1500 | 4 | 0.070 ± 0.010 | 1.200 ± 0.000 | 0.000 | {:.2} | 0.070 | 1.200 | {:.2} |",
+            1.2 / gamma,
+            1.2 / gamma
+        );
+        assert!(md.contains(&fixed), "{md}");
+        assert!(md.contains("`--mu` 0.15"), "{md}");
+    }
+
+    /// Wet runs pair with the dry run sheared from the same settled state in the same cell;
+    /// `Δc*` from the torque is `ΔT*/M*`; realisations average, other cells stay apart.
+    #[test]
+    fn wet_runs_pair_with_the_dry_run_of_their_settled_state() {
+        let mut runs = Vec::new();
+        for (state, dry_t, wet_t) in [("s1", 5.7e5, 6.6e5), ("s2", 5.8e5, 6.6e5)] {
+            let mut d = run(&format!("dry-{state}"), 0.0, 0.0, 0.0, dry_t);
+            d.adhesion = Adhesion::Dry;
+            d.from = Some(state.into());
+            d.torque_factor = 3.0e5;
+            let mut w = run(&format!("wet-{state}"), 75.0, 0.02, 0.3, wet_t);
+            w.from = Some(state.into());
+            w.torque_factor = 3.0e5;
+            runs.extend([d, w]);
+        }
+        let mut other = run("wet-big", 75.0, 0.02, 0.3, 7.0e5);
+        other.from = Some("s1".into());
+        other.cell = "d_p 2.3333 mm".into();
+        runs.push(other);
+        let md = wet_study(&runs, None).expect("study").markdown;
+        // (6.6e5 − 5.7e5)/3e5 = 0.3, (6.6e5 − 5.8e5)/3e5 = 0.267: mean 0.283 ± 0.017.
+        assert!(
+            md.contains("| wet-s1 | dry-s1 | 0.5, 9.81 | 9.0000e4"),
+            "{md}"
+        );
+        assert!(md.contains("| 0.300 ± 0.000 |"), "{md}");
+        assert!(
+            md.contains("| Willett 75 nl, 0.02 N/m | 0.5, 9.81 | 2 | 0.283 ± 0.017 |"),
+            "{md}"
+        );
+        assert!(!md.contains("| wet-big | dry-"), "{md}");
     }
 }
