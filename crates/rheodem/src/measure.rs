@@ -3,18 +3,11 @@
 
 use crate::contact::{PairForce, PairKinematics};
 use crate::domain::Domain;
-use crate::observe::{ContactObserver, ContactView};
+use crate::observe::{ContactObserver, ContactView, outer};
 use crate::particles::Particles;
 use crate::sanity::DeepestContact;
 use glam::{DMat3, DVec3};
 use serde::{Deserialize, Serialize};
-
-/// Outer product `a ⊗ b`, entry `(row k, column l) = a_k b_l`.
-#[inline]
-pub fn outer(a: DVec3, b: DVec3) -> DMat3 {
-    // glam matrices are column-major: column l holds a · b_l.
-    DMat3::from_cols(a * b.x, a * b.y, a * b.z)
-}
 
 /// Sums over contacts gathered by a force evaluation in measuring mode.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]

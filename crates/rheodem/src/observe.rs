@@ -8,12 +8,17 @@
 
 use crate::contact::{ContactHistory, PairForce, PairKernel, PairKinematics};
 use crate::domain::ImageTransform;
-use crate::measure::outer;
 use glam::{DMat3, DVec3};
 use serde::{Deserialize, Serialize};
 
-/// The part index of a particle that belongs to no wall part (a free particle).
-pub const NO_PART: u16 = u16::MAX;
+pub use crate::particles::NO_PART;
+
+/// Outer product `a ⊗ b`, entry `(row k, column l) = a_k b_l`.
+#[inline]
+pub fn outer(a: DVec3, b: DVec3) -> DMat3 {
+    // glam matrices are column-major: column l holds a · b_l.
+    DMat3::from_cols(a * b.x, a * b.y, a * b.z)
+}
 
 /// One interacting pair `(i, j)` as the force loop sees it, in `i`'s frame: `j` is seen
 /// through `image` (for an analytic wall, `j` is the wall).

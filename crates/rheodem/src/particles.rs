@@ -4,9 +4,11 @@
 //! current *slot*. Slots change when the neighbour list re-sorts particles by cell; the
 //! permanent identity of a particle is its [`Particles::id`]. All quantities are SI.
 
-use crate::observe::NO_PART;
 use glam::DVec3;
 use serde::{Deserialize, Serialize};
+
+/// The part index of a particle that belongs to no wall part (a free particle).
+pub const NO_PART: u16 = u16::MAX;
 
 /// How a particle moves.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]

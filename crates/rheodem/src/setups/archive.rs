@@ -7,8 +7,8 @@
 //! written atomically under its own name, and the table is rewritten under the archive's
 //! lock (`.lock`, waited for), so that the last writer's table lists every point.
 
+use super::point_result::{PointResult, results_csv};
 use super::shear_box::ShearBoxSpec;
-use super::sweep::{PointResult, results_csv};
 use crate::io::atomic::write_atomic;
 use crate::io::lock::{DirLock, LockError};
 use std::path::{Path, PathBuf};

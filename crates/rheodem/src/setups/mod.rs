@@ -5,6 +5,7 @@ pub mod cohesion_figures;
 pub mod compare;
 pub mod law_fits;
 pub mod phase_diagram;
+pub mod point_result;
 pub mod regimes;
 pub mod results_db;
 pub mod shear_box;
