@@ -1,7 +1,11 @@
 //! # rheodem
 //!
-//! A discrete-element (DEM) engine for polydisperse soft spheres with linear visco-elastic
-//! frictional contacts, and the rheology tools built on it. All quantities are SI unless a
+//! A discrete-element (DEM) simulator for polydisperse soft spheres with linear visco-elastic
+//! frictional contacts, and the rheology tools built on it. The engine (particles, contact
+//! laws, boundaries, neighbours, the pair loop, integration, observers, the step) is the
+//! crate `rheodem-engine`, re-exported here under the same module names; this crate adds
+//! scenario files, run directories and checkpoints, coarse-graining, analysis and fits, the
+//! set-ups and studies, figures and the results database. All quantities are SI unless a
 //! doc comment says otherwise.
 //!
 //! # Quick start
@@ -51,36 +55,20 @@
 pub mod analysis;
 pub mod band;
 pub mod bench;
-mod cell_walk;
 pub mod cg;
-pub mod contact;
-mod displacement;
-pub mod domain;
 pub mod fit;
-pub mod forces;
-pub mod generate;
-pub mod integrate;
 pub mod io;
-pub mod measure;
-pub mod memory;
-pub mod neighbor;
-pub mod observe;
-pub mod particles;
 pub mod plot;
-pub mod prune;
 pub mod rheology;
 pub mod run;
-pub mod sanity;
 pub mod scenario;
 pub mod setups;
-pub mod simulation;
-pub mod stage;
-pub mod stress_control;
-pub mod team;
-pub mod timestep;
-pub mod walls;
 
-pub use simulation::Simulation;
+// The engine (its own crate, `rheodem-engine`), under the same paths as before it moved.
+pub use rheodem_engine::{
+    Simulation, contact, domain, forces, generate, integrate, measure, memory, neighbor, observe,
+    particles, prune, sanity, simulation, stage, stress_control, team, timestep, walls,
+};
 
 /// Version of the program, recorded in every output; checkpoints resume only under the
 /// same version.

@@ -1206,7 +1206,7 @@ fn touch_batch<O: ContactObserver, const AVX: bool>(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::bench::{BenchCohesion, bench_law};
+    use crate::contact::standard::{BenchCohesion, bench_law};
     use crate::contact::{Adhesion, ContactHistory, ContactLaw, Resistance};
     use crate::domain::Domain;
     use crate::particles::{Motion, Sphere};

@@ -89,7 +89,7 @@ impl NormalLaw {
     /// `t_c = π / sqrt(k_n/m_ij − (γ_n / 2 m_ij)²)` and restitutes `e`:
     ///
     /// ```
-    /// use rheodem::contact::{Damping, NormalLaw};
+    /// use rheodem_engine::contact::{Damping, NormalLaw};
     /// use std::f64::consts::PI;
     ///
     /// let (k_n, e, m_ij) = (100.0, 0.8, 5.0e-6);

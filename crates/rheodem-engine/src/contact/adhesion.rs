@@ -24,7 +24,7 @@ use std::f64::consts::PI;
 /// and ruptures past `S_c = (1 + θ/2) V_b^{1/3}`; it forms only at contact:
 ///
 /// ```
-/// use rheodem::contact::Adhesion;
+/// use rheodem_engine::contact::Adhesion;
 /// use std::f64::consts::PI;
 ///
 /// let (gamma, theta, volume) = (0.02, 20f64.to_radians(), 75e-12);

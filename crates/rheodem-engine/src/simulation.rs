@@ -75,10 +75,10 @@ impl Simulation {
     ///
     /// ```
     /// use glam::DVec3;
-    /// use rheodem::Simulation;
-    /// use rheodem::contact::{Adhesion, ContactLaw, ContactTable, Damping, NormalLaw, Resistance};
-    /// use rheodem::domain::Domain;
-    /// use rheodem::particles::{Motion, Particles, Sphere};
+    /// use rheodem_engine::Simulation;
+    /// use rheodem_engine::contact::{Adhesion, ContactLaw, ContactTable, Damping, NormalLaw, Resistance};
+    /// use rheodem_engine::domain::Domain;
+    /// use rheodem_engine::particles::{Motion, Particles, Sphere};
     ///
     /// let (a, delta, k_n) = (1.0e-3, 1.0e-5, 100.0);
     /// let law = ContactLaw {
@@ -118,7 +118,7 @@ impl Simulation {
     /// let sigma_xx = k_n * delta * (2.0 * a - delta) / 0.02f64.powi(3);
     /// assert!((o.stress[0][0] / sigma_xx - 1.0).abs() < 1e-12);
     /// assert_eq!(o.stress[1][1], 0.0);
-    /// # Ok::<(), rheodem::neighbor::NeighborError>(())
+    /// # Ok::<(), rheodem_engine::neighbor::NeighborError>(())
     /// ```
     #[allow(clippy::too_many_arguments)]
     pub fn new(

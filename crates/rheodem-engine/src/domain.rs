@@ -682,20 +682,20 @@ mod tests {
             #[serde(alias = "peculiar_contacts")]
             d: ShearDynamics,
         }
-        let read = |text: &str| toml::from_str::<T>(text).map(|t| t.d);
+        let read = |text: &str| serde_json::from_str::<T>(text).map(|t| t.d);
         for d in ShearDynamics::ALL {
-            assert_eq!(read(&format!("d = \"{d}\"")).expect("name"), d);
+            assert_eq!(read(&format!("{{\"d\": \"{d}\"}}")).expect("name"), d);
             assert_eq!(d.name().parse::<ShearDynamics>().expect("parse"), d);
         }
         assert_eq!(
-            read("peculiar_contacts = true").expect("true"),
+            read(r#"{"peculiar_contacts": true}"#).expect("true"),
             ShearDynamics::PeculiarContacts
         );
         assert_eq!(
-            read("peculiar_contacts = false").expect("false"),
+            read(r#"{"peculiar_contacts": false}"#).expect("false"),
             ShearDynamics::Lab
         );
-        let e = read("d = \"sllod\"").expect_err("unknown").to_string();
+        let e = read(r#"{"d": "sllod"}"#).expect_err("unknown").to_string();
         assert!(e.contains("sllod") && e.contains("affine-drag"), "{e}");
         // Checkpoints (MessagePack, named fields) of either spelling read back.
         let mut le = Domain::new(DVec3::ZERO, DVec3::ONE, [true; 3]).with_lees_edwards(2.0);

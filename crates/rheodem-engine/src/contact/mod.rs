@@ -18,6 +18,7 @@ pub mod kernel;
 pub mod lanes;
 pub mod normal;
 pub mod slots;
+pub mod standard;
 
 use crate::domain::ImageTransform;
 use glam::DVec3;
@@ -148,7 +149,7 @@ impl ContactLaw {
     ///
     /// ```
     /// use glam::DVec3;
-    /// use rheodem::contact::{
+    /// use rheodem_engine::contact::{
     ///     Adhesion, ContactHistory, ContactLaw, Damping, NormalLaw, PairKinematics, Resistance,
     /// };
     ///
