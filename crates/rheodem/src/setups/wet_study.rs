@@ -146,6 +146,8 @@ fn cell_label(spec: &SplitBottomSpec) -> String {
 struct RunSummary {
     spec: SplitBottomSpec,
     #[serde(default)]
+    stage: Option<String>,
+    #[serde(default)]
     from: Option<String>,
     groups: Groups,
     results: Option<TorqueResults>,
@@ -175,6 +177,11 @@ impl WetRun {
             .map_err(|e| format!("cannot read {}: {e}", file.display()))?;
         let s: RunSummary = serde_json::from_str(&text)
             .map_err(|e| format!("{} is not a split-bottom summary: {e}", file.display()))?;
+        if let Some(stage) = s.stage.as_deref().filter(|&stage| stage != "done") {
+            return Err(format!(
+                "{name}: not finished (stage {stage}; its summary is a running one)"
+            ));
+        }
         let band = s
             .band_rheology
             .ok_or_else(|| format!("{name}: no band rheology (fields off, or not finished)"))?;
@@ -936,5 +943,26 @@ mod tests {
             "{md}"
         );
         assert!(!md.contains("| wet-big | dry-"), "{md}");
+    }
+
+    /// A running run's summary (written at each checkpoint) is left out, saying why; the
+    /// same summary finished counts.
+    #[test]
+    fn a_running_summary_is_left_out() {
+        let finished = concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/../../validation/runs-split-bottom-rate/dry-omega0.5/summary.json"
+        );
+        let text = std::fs::read_to_string(finished).expect("a committed summary");
+        assert!(WetRun::read_summary(Path::new(finished), "done").is_ok());
+        let mut value: serde_json::Value = serde_json::from_str(&text).expect("json");
+        value["stage"] = "shear".into();
+        let dir = std::env::temp_dir().join(format!("rheodem-wet-running-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).expect("dir");
+        let running = dir.join("summary.json");
+        std::fs::write(&running, value.to_string()).expect("write");
+        let e = WetRun::read_summary(&running, "running").expect_err("running");
+        assert!(e.contains("running: not finished (stage shear"), "{e}");
+        std::fs::remove_dir_all(&dir).ok();
     }
 }
