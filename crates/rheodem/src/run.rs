@@ -251,7 +251,11 @@ pub fn write_checkpoint<T: Serialize>(path: &Path, state: &T) -> Result<(), RunE
     write_atomic(path, &checkpoint_bytes(&body)).map_err(io_err("write", path))
 }
 
-/// Reads a checkpoint file written by [`write_checkpoint`] under this program version.
+/// Reads a checkpoint file written by [`write_checkpoint`] in this checkpoint format (the
+/// header) by this program version or an earlier one: the state's fields are named, and
+/// fields added since take their defaults (docs/compatibility.md). A checkpoint of a newer
+/// version is refused before its state is read, since fields this version does not know
+/// would be dropped.
 pub fn read_checkpoint<T: serde::de::DeserializeOwned>(path: &Path) -> Result<T, RunError> {
     let bytes = std::fs::read(path).map_err(io_err("read", path))?;
     let bad = |reason: String| RunError::Checkpoint {
@@ -259,15 +263,28 @@ pub fn read_checkpoint<T: serde::de::DeserializeOwned>(path: &Path) -> Result<T,
         reason,
     };
     let body = checkpoint_body(&bytes).map_err(bad)?;
-    let (version, state): (String, T) =
+    let (version, _): (String, serde::de::IgnoredAny) =
         rmp_serde::from_slice(body).map_err(|e| bad(e.to_string()))?;
-    if version != crate::VERSION {
+    if !readable_version(&version) {
         return Err(bad(format!(
-            "written by rheodem {version}, this is {}",
+            "written by rheodem {version}, newer than this rheodem {}: resume it with that \
+             version or a later one",
             crate::VERSION
         )));
     }
+    let (_, state): (String, T) = rmp_serde::from_slice(body).map_err(|e| bad(e.to_string()))?;
     Ok(state)
+}
+
+/// Whether a checkpoint body written by program `version` (`major.minor.patch`) may be
+/// read here: not newer than [`crate::VERSION`].
+fn readable_version(version: &str) -> bool {
+    let parse = |v: &str| -> Option<Vec<u64>> {
+        let core = v.split(['-', '+']).next()?;
+        let parts: Option<Vec<u64>> = core.split('.').map(|x| x.parse().ok()).collect();
+        parts.filter(|p| p.len() == 3)
+    };
+    matches!((parse(version), parse(crate::VERSION)), (Some(a), Some(b)) if a <= b)
 }
 
 /// The verified body of a checkpoint file, or why it is unusable.

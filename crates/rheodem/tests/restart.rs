@@ -161,3 +161,38 @@ fn a_run_that_blows_up_stops_with_an_error_and_keeps_its_checkpoint() {
     assert!(resumed.rows.iter().all(|r| r.is_finite()));
     let _ = std::fs::remove_dir_all(dir);
 }
+
+/// The compatibility rule of docs/compatibility.md: a checkpoint of this format written by
+/// an earlier version reads (fields added since take their defaults), one written by a
+/// newer version is refused with a message that names both versions, and this version's
+/// own checkpoints read back.
+#[test]
+fn checkpoints_of_earlier_versions_read_and_of_newer_ones_are_refused() {
+    use rheodem::run::{read_checkpoint, write_checkpoint};
+    let dir = temp_dir("versions");
+    std::fs::create_dir_all(&dir).expect("dir");
+    let state = vec![1.5f64, -2.0];
+    let written_by = |version: &str| {
+        let body = rmp_serde::to_vec_named(&(version, &state)).expect("encode");
+        let mut bytes = b"RHEODEM3".to_vec();
+        bytes.extend_from_slice(&crc32fast::hash(&body).to_le_bytes());
+        bytes.extend_from_slice(&body);
+        let path = dir.join(format!("checkpoint-{version}.bin"));
+        std::fs::write(&path, bytes).expect("write");
+        path
+    };
+    let old: Vec<f64> = read_checkpoint(&written_by("0.1.0")).expect("an earlier version");
+    assert_eq!(old, state);
+    let e = read_checkpoint::<Vec<f64>>(&written_by("99.0.0"))
+        .expect_err("a newer version")
+        .to_string();
+    assert!(
+        e.contains("written by rheodem 99.0.0, newer than this rheodem")
+            && e.contains(rheodem::VERSION),
+        "{e}"
+    );
+    let own = dir.join("own.bin");
+    write_checkpoint(&own, &state).expect("write");
+    assert_eq!(read_checkpoint::<Vec<f64>>(&own).expect("read"), state);
+    let _ = std::fs::remove_dir_all(dir);
+}
