@@ -10,255 +10,28 @@
 //! [`Domain::mean_flow`] and [`Domain::peculiar_velocity`] (what a stored velocity means
 //! under the box's [`ShearDynamics`]).
 //!
+//! Each kind of boundary is a module of its own: [`lees_edwards`] (the sheared images across
+//! `y`, their velocity jump, the shift and its wraps, the mean flow, affine drag), [`wedge`]
+//! (the rotated images, their wrap and the sector's volume) and [`image`] (image codes and
+//! transforms); the box with its periodic axes is [`Domain`] itself, which asks the
+//! boundary it holds.
+//!
 //! A pair that interacts across a periodic boundary is stored in the neighbour list with an
 //! *image code*: which copy of the second particle it sees. The code is fixed between list
 //! builds while the geometric transformation it stands for may change every step (a box
 //! that is compressed, a Lees-Edwards shift). The force loop asks the domain for the
 //! current transform of every code once per step.
 
+pub mod image;
+pub mod lees_edwards;
+pub mod wedge;
+
+pub use image::{IDENTITY_IMAGE, IMAGE_COUNT, ImageTransform, image_code, image_offsets};
+pub use lees_edwards::{LeesEdwards, ShearDynamics};
+pub use wedge::Wedge;
+
 use glam::{DMat3, DVec3};
 use serde::{Deserialize, Serialize};
-
-/// Number of image codes: one for each of the 3×3×3 neighbouring copies of the box.
-pub const IMAGE_COUNT: usize = 27;
-/// The image code of the particle itself (no shift).
-pub const IDENTITY_IMAGE: u8 = 13;
-
-/// Packs the cell offsets `(cx, cy, cz)`, each in `{-1, 0, 1}`, into an image code.
-#[inline]
-pub fn image_code(c: [i32; 3]) -> u8 {
-    ((c[0] + 1) + 3 * (c[1] + 1) + 9 * (c[2] + 1)) as u8
-}
-
-/// Unpacks an image code into its cell offsets.
-#[inline]
-pub fn image_offsets(code: u8) -> [i32; 3] {
-    let c = code as i32;
-    [c % 3 - 1, (c / 3) % 3 - 1, c / 9 - 1]
-}
-
-/// How to map a particle onto one of its periodic images: `r' = R r + shift`,
-/// `v' = R v + velocity_shift`, `ω' = R ω`.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct ImageTransform {
-    /// Rotation `R`; `None` for a pure translation (the common case, kept cheap).
-    pub rotation: Option<DMat3>,
-    /// Translation added to positions (m).
-    pub shift: DVec3,
-    /// Velocity added to velocities (m/s).
-    pub velocity_shift: DVec3,
-}
-
-impl ImageTransform {
-    /// The identity transformation.
-    pub const IDENTITY: ImageTransform = ImageTransform {
-        rotation: None,
-        shift: DVec3::ZERO,
-        velocity_shift: DVec3::ZERO,
-    };
-
-    /// Image of a position (m).
-    #[inline]
-    pub fn position(&self, r: DVec3) -> DVec3 {
-        match self.rotation {
-            None => r + self.shift,
-            Some(m) => m * r + self.shift,
-        }
-    }
-
-    /// Image of a velocity (m/s).
-    #[inline]
-    pub fn velocity(&self, v: DVec3) -> DVec3 {
-        match self.rotation {
-            None => v + self.velocity_shift,
-            Some(m) => m * v + self.velocity_shift,
-        }
-    }
-
-    /// Image of an angular velocity (rad/s).
-    #[inline]
-    pub fn angular_velocity(&self, w: DVec3) -> DVec3 {
-        self.vector(w)
-    }
-
-    /// Image of a free vector (a force, a spring, an axis): `R u`.
-    #[inline]
-    pub fn vector(&self, u: DVec3) -> DVec3 {
-        match self.rotation {
-            None => u,
-            Some(m) => m * u,
-        }
-    }
-
-    /// A vector (force, torque, spring) of the image frame seen in the original particle's
-    /// frame: `Rᵀ u`.
-    #[inline]
-    pub fn vector_back(&self, u: DVec3) -> DVec3 {
-        match self.rotation {
-            None => u,
-            Some(m) => m.transpose() * u,
-        }
-    }
-
-    /// A position of the image frame mapped back to the original frame: `Rᵀ (r − shift)` (m).
-    #[inline]
-    pub fn position_back(&self, r: DVec3) -> DVec3 {
-        self.vector_back(r - self.shift)
-    }
-}
-
-/// An angular-periodic wedge `0 ≤ φ < Φ` about the `z` axis through the origin
-/// (docs/model.md §4.6): a particle leaving through one face re-enters through the other with
-/// its position, velocity and spin rotated by `∓Φ`, and pairs interact through the images
-/// rotated by `±Φ`.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
-pub struct Wedge {
-    /// Opening angle `Φ` (rad), in `(0, π]`.
-    pub angle: f64,
-    /// Smallest distance from the axis at which particles are expected (m); it bounds the
-    /// wedge's width for the neighbour search.
-    pub inner_radius: f64,
-    /// Largest distance from the axis at which particles are expected (m).
-    pub outer_radius: f64,
-}
-
-impl Wedge {
-    /// Rotation about `z` by `turns · Φ`.
-    pub fn rotation(&self, turns: i32) -> DMat3 {
-        DMat3::from_rotation_z(turns as f64 * self.angle)
-    }
-
-    /// Whether the images `+Φ` and `−Φ` are the same copy (`Φ = π`).
-    pub fn half_turn(&self) -> bool {
-        (self.angle - std::f64::consts::PI).abs() < 1e-12
-    }
-
-    /// Distance (m) from `q` (projected on `x`–`y`) to the wedge `0 ≤ φ ≤ Φ`: zero inside.
-    pub fn distance(&self, q: DVec3) -> f64 {
-        let p = DVec3::new(q.x, q.y, 0.0);
-        let phi = p.y.atan2(p.x);
-        let phi = if phi < 0.0 {
-            phi + std::f64::consts::TAU
-        } else {
-            phi
-        };
-        if phi <= self.angle {
-            return 0.0;
-        }
-        let to_ray = |theta: f64| {
-            let u = DVec3::new(theta.cos(), theta.sin(), 0.0);
-            let t = p.dot(u);
-            if t <= 0.0 {
-                p.length()
-            } else {
-                (p - u * t).length()
-            }
-        };
-        to_ray(0.0).min(to_ray(self.angle))
-    }
-}
-
-/// How a Lees-Edwards box moves its particles and what their stored velocities mean
-/// (docs/model.md §4.3–4.5).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
-#[serde(rename_all = "kebab-case")]
-pub enum ShearDynamics {
-    /// Lab frame (the default, §4.3): velocities are full velocities, `dv/dt = F/m`; images
-    /// across `y` move `±γ̇ L_y` along `x`, and contacts see the full relative velocity.
-    #[default]
-    Lab,
-    /// The lab-frame dynamics, but every contact subtracts the mean-flow difference
-    /// `γ̇ l_y x̂` of its two particles from its relative velocity (§4.4), for comparison.
-    PeculiarContacts,
-    /// Affine drag (§4.5, the dynamics of the source papers' code): velocities `c` are
-    /// relative to the mean flow and obey `dc/dt = F/m`; every free particle is moved by
-    /// `(c + γ̇ (y − lo_y) x̂) dt`; images carry no velocity jump and contacts see
-    /// `c_i − c_j`.
-    AffineDrag,
-}
-
-impl ShearDynamics {
-    /// Every option, in the order of the documentation.
-    pub const ALL: [ShearDynamics; 3] = [
-        ShearDynamics::Lab,
-        ShearDynamics::PeculiarContacts,
-        ShearDynamics::AffineDrag,
-    ];
-
-    /// The name used in scenario files and on the command line.
-    pub fn name(self) -> &'static str {
-        match self {
-            ShearDynamics::Lab => "lab",
-            ShearDynamics::PeculiarContacts => "peculiar-contacts",
-            ShearDynamics::AffineDrag => "affine-drag",
-        }
-    }
-}
-
-impl std::fmt::Display for ShearDynamics {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(self.name())
-    }
-}
-
-impl std::str::FromStr for ShearDynamics {
-    type Err = String;
-
-    fn from_str(s: &str) -> Result<ShearDynamics, String> {
-        ShearDynamics::ALL
-            .into_iter()
-            .find(|d| d.name() == s)
-            .ok_or_else(|| {
-                format!(
-                    "unknown shear dynamics {s:?}: expected lab, peculiar-contacts or affine-drag"
-                )
-            })
-    }
-}
-
-/// Reads a name (`"affine-drag"`), or the boolean of the older key `peculiar_contacts`
-/// (`true` = [`ShearDynamics::PeculiarContacts`], `false` = [`ShearDynamics::Lab`]), so that
-/// files written before the three options existed still read the same.
-impl<'de> Deserialize<'de> for ShearDynamics {
-    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<ShearDynamics, D::Error> {
-        struct Visitor;
-        impl serde::de::Visitor<'_> for Visitor {
-            type Value = ShearDynamics;
-            fn expecting(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-                f.write_str("\"lab\", \"peculiar-contacts\" or \"affine-drag\"")
-            }
-            fn visit_str<E: serde::de::Error>(self, v: &str) -> Result<ShearDynamics, E> {
-                v.parse().map_err(E::custom)
-            }
-            fn visit_bool<E: serde::de::Error>(self, v: bool) -> Result<ShearDynamics, E> {
-                Ok(if v {
-                    ShearDynamics::PeculiarContacts
-                } else {
-                    ShearDynamics::Lab
-                })
-            }
-        }
-        d.deserialize_any(Visitor)
-    }
-}
-
-/// Lees-Edwards boundaries (docs/model.md §4.3–4.5): shear along `x`, gradient along `y`.
-/// The image across `y = L_y` is shifted by `shift` in `x`; in the lab frame it also moves
-/// `γ̇ L_y` faster in `x`.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
-pub struct LeesEdwards {
-    /// Shear rate `γ̇` (1/s).
-    pub shear_rate: f64,
-    /// Accumulated shift `s = ∫ γ̇ L_y dt`, kept in `[−L_x/2, L_x/2)` (m).
-    pub shift: f64,
-    /// How often `shift` has been brought back into its range (each time the image codes
-    /// of the neighbour list change meaning, so the list must be rebuilt).
-    pub wraps: u64,
-    /// The dynamics of the sheared particles (default the lab frame). Also read from the
-    /// boolean `peculiar_contacts` of older checkpoints.
-    #[serde(default, alias = "peculiar_contacts")]
-    pub dynamics: ShearDynamics,
-}
 
 /// An axis-aligned box `[lo, hi]` with per-axis periodicity, optionally sheared by
 /// Lees-Edwards boundaries.
@@ -324,12 +97,7 @@ impl Domain {
 
     /// Adds Lees-Edwards shear at rate `shear_rate` (1/s), shift zero.
     pub fn with_lees_edwards(mut self, shear_rate: f64) -> Domain {
-        self.lees_edwards = Some(LeesEdwards {
-            shear_rate,
-            shift: 0.0,
-            wraps: 0,
-            dynamics: ShearDynamics::Lab,
-        });
+        self.lees_edwards = Some(LeesEdwards::new(shear_rate));
         self
     }
 
@@ -338,7 +106,7 @@ impl Domain {
     #[inline]
     pub fn mean_flow(&self, r: DVec3) -> DVec3 {
         match &self.lees_edwards {
-            Some(le) => DVec3::new(le.shear_rate * (r.y - self.lo.y), 0.0, 0.0),
+            Some(le) => le.mean_flow(r.y - self.lo.y),
             None => DVec3::ZERO,
         }
     }
@@ -389,17 +157,8 @@ impl Domain {
     /// Under affine drag, moves every free particle by the mean flow over `dt` (s),
     /// `x += γ̇ (y − lo_y) dt`; does nothing otherwise.
     pub fn drag_affinely(&self, positions: &mut [DVec3], free: impl Fn(usize) -> bool, dt: f64) {
-        let Some(le) = self
-            .lees_edwards
-            .filter(|le| le.dynamics == ShearDynamics::AffineDrag)
-        else {
-            return;
-        };
-        let (rate, lo_y) = (le.shear_rate * dt, self.lo.y);
-        for (i, r) in positions.iter_mut().enumerate() {
-            if free(i) {
-                r.x += rate * (r.y - lo_y);
-            }
+        if let Some(le) = &self.lees_edwards {
+            le.drag(positions, free, dt, self.lo.y);
         }
     }
 
@@ -408,15 +167,7 @@ impl Domain {
     pub fn advance(&mut self, dt: f64) {
         let l = self.lengths();
         if let Some(le) = &mut self.lees_edwards {
-            let strain = le.shear_rate * dt;
-            le.shift += strain * l.y;
-            if le.shift >= 0.5 * l.x || le.shift < -0.5 * l.x {
-                le.shift -= l.x * (le.shift / l.x).round();
-                if le.shift >= 0.5 * l.x {
-                    le.shift -= l.x;
-                }
-                le.wraps += 1;
-            }
+            let strain = le.advance(dt, l);
             let mut shear = DMat3::IDENTITY;
             shear.y_axis.x = strain;
             self.deformation = shear * self.deformation;
@@ -445,7 +196,7 @@ impl Domain {
     pub fn volume(&self) -> f64 {
         let l = self.lengths();
         match &self.wedge {
-            Some(w) => 0.5 * w.angle * (w.outer_radius.powi(2) - w.inner_radius.powi(2)) * l.z,
+            Some(w) => w.volume(l.z),
             None => l.x * l.y * l.z,
         }
     }
@@ -455,14 +206,7 @@ impl Domain {
     /// image `c` is within `d` when `|T_c⁻¹ r_i − r_j| < d`. Empty without a wedge; the
     /// wedge's images rotate by `±Φ` (codes of offsets `(±1, 0, 0)`), one of them at `Φ = π`.
     pub fn rotated_images(&self) -> Vec<(u8, DMat3)> {
-        match &self.wedge {
-            None => Vec::new(),
-            Some(w) if w.half_turn() => vec![(image_code([1, 0, 0]), w.rotation(-1))],
-            Some(w) => vec![
-                (image_code([1, 0, 0]), w.rotation(-1)),
-                (image_code([-1, 0, 0]), w.rotation(1)),
-            ],
-        }
+        self.wedge.map_or_else(Vec::new, |w| w.rotated_images())
     }
 
     /// The wedge turns (multiples of `Φ`) of an image code: its `x` offset under a wedge,
@@ -482,23 +226,12 @@ impl Domain {
     /// A wedge's images are rotations by `c_x Φ` about `z`.
     pub fn image_transforms(&self) -> [ImageTransform; IMAGE_COUNT] {
         if let Some(w) = &self.wedge {
-            return std::array::from_fn(|code| {
-                let turns = image_offsets(code as u8)[0];
-                ImageTransform {
-                    rotation: (turns != 0).then(|| w.rotation(turns)),
-                    ..ImageTransform::IDENTITY
-                }
-            });
+            return w.image_transforms();
         }
         let l = self.lengths();
-        let (s, u) = self.lees_edwards.map_or((0.0, 0.0), |le| {
-            let jump = if le.dynamics == ShearDynamics::AffineDrag {
-                0.0
-            } else {
-                le.shear_rate * l.y
-            };
-            (le.shift, jump)
-        });
+        let (s, u) = self
+            .lees_edwards
+            .map_or((0.0, 0.0), |le| (le.shift, le.velocity_jump(l.y)));
         std::array::from_fn(|code| {
             let c = image_offsets(code as u8);
             let (cx, cy, cz) = (c[0] as f64, c[1] as f64, c[2] as f64);
@@ -522,18 +255,7 @@ impl Domain {
         spin: &mut DVec3,
     ) -> ImageTransform {
         if let Some(w) = &self.wedge {
-            let turns = self.wedge_turns(*position);
-            if turns == 0 {
-                return ImageTransform::IDENTITY;
-            }
-            let m = w.rotation(-turns);
-            *position = m * *position;
-            *velocity = m * *velocity;
-            *spin = m * *spin;
-            return ImageTransform {
-                rotation: Some(m),
-                ..ImageTransform::IDENTITY
-            };
+            return w.wrap(position, velocity, spin);
         }
         let before = *position;
         self.wrap_translation(position, velocity);
@@ -546,33 +268,13 @@ impl Domain {
     /// How many wedge angles `Φ` the azimuth of `r` lies outside `[0, Φ)` (zero without a
     /// wedge): [`Domain::wrap`] rotates such a particle by `−turns · Φ`.
     pub fn wedge_turns(&self, r: DVec3) -> i32 {
-        self.wedge.map_or(0, |w| wedge_turns(w.angle, r))
+        self.wedge.map_or(0, |w| w.turns(r))
     }
 
     fn wrap_translation(&self, position: &mut DVec3, velocity: &mut DVec3) {
         let l = self.lengths();
         if let Some(le) = &self.lees_edwards {
-            let jump = if le.dynamics == ShearDynamics::AffineDrag {
-                0.0
-            } else {
-                le.shear_rate * l.y
-            };
-            let mut k = ((position.y - self.lo.y) / l.y).floor();
-            // One more crossing where rounding left y on the boundary.
-            for _ in 0..3 {
-                if k != 0.0 {
-                    position.y -= k * l.y;
-                    position.x -= k * le.shift;
-                    velocity.x -= k * jump;
-                }
-                k = if position.y >= self.hi.y {
-                    1.0
-                } else if position.y < self.lo.y {
-                    -1.0
-                } else {
-                    break;
-                };
-            }
+            le.wrap_y(position, velocity, self.lo.y, self.hi.y, l.y);
         }
         for axis in 0..3 {
             if self.periodic[axis] && !(axis == 1 && self.lees_edwards.is_some()) {
@@ -629,25 +331,6 @@ impl Domain {
         }
         self.deformation = DMat3::from_diagonal(s) * self.deformation;
     }
-}
-
-/// How many wedge angles `Φ` the azimuth of `r` lies outside `[0, Φ)`: `⌊φ/Φ⌋` with `φ`
-/// measured in `(−π, π]`, corrected where rounding leaves the rotated position on a face.
-fn wedge_turns(angle: f64, r: DVec3) -> i32 {
-    let phi = r.y.atan2(r.x);
-    let mut turns = (phi / angle).floor() as i32;
-    // The rotated azimuth must land in [0, Φ); fix the rare off-by-one at a face.
-    for _ in 0..2 {
-        let back = phi - turns as f64 * angle;
-        if back < 0.0 {
-            turns -= 1;
-        } else if back >= angle {
-            turns += 1;
-        } else {
-            break;
-        }
-    }
-    turns
 }
 
 #[cfg(test)]
