@@ -586,7 +586,7 @@ pub fn wet_study(runs: &[WetRun], mu: Option<f64>) -> Result<WetStudy, String> {
             &Labels {
                 title: "c* − c*₀ against S_c* (Roy et al. 2016, Fig. 8a)",
                 x: "rupture distance S_c* = S_c/d_p",
-                y: "c* − c*₀ (c*₀ the fitted V_b → 0 limit)",
+                y: "c* − c*₀ (c*₀: the 0 nl run, else the fitted V_b → 0 limit)",
             },
             "Eq. 20 (a = 0.98)",
             &groups,
