@@ -1,10 +1,11 @@
 //! `rheodem contact …`: force–overlap curves and the equivalent linear model.
 
+use crate::law_arg;
 use anyhow::{Context, Result, bail};
-use clap::{Args, Subcommand, ValueEnum};
+use clap::{Args, Subcommand};
 use rheodem::contact::curve::{drive, standard_cycle};
 use rheodem::contact::equivalent::equivalent_linear;
-use rheodem::contact::{Adhesion, ContactLaw, Damping, NormalLaw, Resistance};
+use rheodem::contact::{ContactLaw, Damping, LawKind, LawSpec, NormalLaw, Resistance};
 use rheodem::io::atomic::write_atomic;
 use rheodem::plot::{Labels, Series, line_plot_svg};
 use rheodem::scenario::{Scenario, contact_table};
@@ -22,19 +23,6 @@ pub enum ContactCommand {
     Equivalent(EquivalentArgs),
 }
 
-/// Adhesive law chosen on the command line.
-#[derive(Clone, Copy, ValueEnum)]
-pub enum LawName {
-    /// No adhesion.
-    None,
-    /// Reversible linear adhesion.
-    Reversible,
-    /// Willett liquid bridge.
-    LiquidBridge,
-    /// Linear irreversible adhesion.
-    LinearIrreversible,
-}
-
 /// Arguments of `contact curve`.
 #[derive(Args)]
 #[command(allow_negative_numbers = true)]
@@ -45,9 +33,10 @@ pub struct CurveArgs {
     /// Species pair of the scenario, e.g. `glass,glass` (default: the first species twice).
     #[arg(long, value_delimiter = ',')]
     pair: Vec<String>,
-    /// Adhesive law (without --scenario).
-    #[arg(long, value_enum, default_value = "liquid-bridge")]
-    law: LawName,
+    // Adhesive law (without --scenario); the help text lists the registered laws.
+    #[arg(long, default_value = "liquid-bridge", value_parser = law_arg::law_kind,
+          help = law_arg::law_help("Adhesive law (without --scenario)"))]
+    law: LawKind,
     /// Normal stiffness k_n (N/m).
     #[arg(long, default_value_t = 100.0)]
     stiffness: f64,
@@ -66,6 +55,10 @@ pub struct CurveArgs {
     /// Bridge volume V_b (m³).
     #[arg(long, default_value_t = 75e-12)]
     volume: f64,
+    /// Any parameter the law declares, as key=value in its units (repeatable; overrides
+    /// the flags above), e.g. `--param range=1e-4`.
+    #[arg(long = "param", value_parser = law_arg::law_parameter)]
+    params: Vec<(String, f64)>,
     /// Radius of the first particle (m).
     #[arg(long, default_value_t = 1.1e-3)]
     radius_i: f64,
@@ -120,30 +113,51 @@ fn flag_law(a: &CurveArgs) -> Result<ContactLaw> {
             bail!("--{name} = {v}: must be a positive finite number")
         }
     };
-    let adhesion = match a.law {
-        LawName::None => Adhesion::None,
-        LawName::Reversible => Adhesion::Reversible {
-            max_force: positive("max-force", a.max_force)?,
-            stiffness: positive("adhesive-stiffness", a.adhesive_stiffness)?,
-        },
-        LawName::LinearIrreversible => Adhesion::LinearIrreversible {
-            max_force: positive("max-force", a.max_force)?,
-            stiffness: positive("adhesive-stiffness", a.adhesive_stiffness)?,
-        },
-        LawName::LiquidBridge => {
-            if !(0.0..90.0).contains(&a.contact_angle_deg) {
-                bail!(
-                    "--contact-angle-deg = {}: must lie in [0, 90)",
-                    a.contact_angle_deg
-                );
-            }
-            Adhesion::LiquidBridge {
-                surface_tension: positive("surface-tension", a.surface_tension)?,
-                contact_angle: a.contact_angle_deg.to_radians(),
-                volume: positive("volume", a.volume)?,
-            }
+    // The flags that name a parameter of the chosen law, then any --param.
+    let flags = [
+        ("max_force", "max-force", a.max_force),
+        ("stiffness", "adhesive-stiffness", a.adhesive_stiffness),
+        ("surface_tension", "surface-tension", a.surface_tension),
+        (
+            "contact_angle_deg",
+            "contact-angle-deg",
+            a.contact_angle_deg,
+        ),
+        ("volume", "volume", a.volume),
+    ];
+    let declared = a.law.info().parameters;
+    let mut spec = LawSpec::new(
+        a.law,
+        flags
+            .iter()
+            .filter(|(key, _, _)| declared.iter().any(|p| p.key == *key))
+            .map(|&(key, _, v)| (key, v)),
+    );
+    // A --param replaces the flag of its key, and of the key it is given instead of.
+    for (key, v) in &a.params {
+        if let Some(other) = declared
+            .iter()
+            .find(|p| p.key == key)
+            .and_then(|p| p.instead_of)
+        {
+            spec.values.remove(other);
         }
-    };
+        spec.values.insert(key.clone(), *v);
+    }
+    let adhesion = spec.build().map_err(|e| {
+        let option = if e.key.is_empty() {
+            format!("--law {}", a.law)
+        } else {
+            flags
+                .iter()
+                .find(|(key, _, _)| *key == e.key && !a.params.iter().any(|(k, _)| k == key))
+                .map_or_else(
+                    || format!("--param {}", e.key),
+                    |(_, flag, _)| format!("--{flag}"),
+                )
+        };
+        anyhow::anyhow!("{option} = {}: {}", e.value, e.reason)
+    })?;
     Ok(ContactLaw {
         normal: NormalLaw {
             stiffness: positive("stiffness", a.stiffness)?,

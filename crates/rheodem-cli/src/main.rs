@@ -2,6 +2,7 @@
 
 mod cg;
 mod contact;
+mod law_arg;
 mod predict;
 mod progress;
 mod shear;
@@ -10,7 +11,7 @@ mod study;
 
 use anyhow::{Context, Result, bail};
 use clap::{Parser, Subcommand};
-use rheodem::bench::BenchCohesion;
+use rheodem::contact::LawKind;
 use rheodem::io::made_by::{self, Maker};
 use rheodem::run::Run;
 use rheodem::scenario::Scenario;
@@ -161,21 +162,13 @@ enum Command {
         /// Also hold σ_yy at 185 (the LAMMPS steady pressure) by rescaling L_y.
         #[arg(long)]
         stress_control: bool,
-        /// Cohesion variants to measure (default: all three).
-        #[arg(long, value_enum, value_delimiter = ',')]
-        cohesion: Vec<BenchCohesionArg>,
+        // The help text lists the registered laws.
+        #[arg(long, value_delimiter = ',', value_parser = law_arg::law_kind,
+              help = law_arg::law_help("Adhesive laws to measure at the bench strength \
+                  (f_a^max = 185 for the mean pair, rupture at 0.225 d; default: none, \
+                  reversible, liquid_bridge)"))]
+        cohesion: Vec<LawKind>,
     },
-}
-
-/// Cohesion variants of the benchmark.
-#[derive(Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
-enum BenchCohesionArg {
-    /// Plain Hooke + tangential history.
-    None,
-    /// Reversible adhesion, f_a^max = 185 (Bo ≈ 1), k_c = k_n.
-    Reversible,
-    /// Willett liquid bridges, same f_a^max, S_c = 0.225 d.
-    LiquidBridge,
 }
 
 /// The scenario `rheodem run` uses when given none.
@@ -488,24 +481,15 @@ fn run(cli: Cli) -> Result<()> {
                 threads
             };
             let variants = if cohesion.is_empty() {
-                vec![
-                    BenchCohesionArg::None,
-                    BenchCohesionArg::Reversible,
-                    BenchCohesionArg::LiquidBridge,
-                ]
+                vec![LawKind::None, LawKind::Reversible, LawKind::LiquidBridge]
             } else {
                 cohesion
             };
             println!("standard problem: {}", rheodem::bench::DESCRIPTION);
-            for variant in variants {
-                let (cohesion, name) = match variant {
-                    BenchCohesionArg::None => (BenchCohesion::None, "frictional"),
-                    BenchCohesionArg::Reversible => {
-                        (BenchCohesion::Reversible, "reversible adhesion")
-                    }
-                    BenchCohesionArg::LiquidBridge => {
-                        (BenchCohesion::LiquidBridge, "liquid bridges")
-                    }
+            for cohesion in variants {
+                let name = match cohesion {
+                    LawKind::None => "frictional",
+                    law => law.name(),
                 };
                 for &n in &counts {
                     let (pool, n) = pool(Some(n))?;

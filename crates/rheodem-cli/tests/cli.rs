@@ -246,6 +246,45 @@ fn contact_tools_write_csv_and_svg() {
     assert!(csv.starts_with("leg,overlap_m,normal_force_N"));
     let svg = std::fs::read_to_string(prefix.with_extension("svg")).expect("svg");
     assert!(svg.contains("<svg") && svg.contains("overlap"));
+    // Any registered law by any of its names; its parameters by flag or by --param,
+    // each error naming the option and the allowed range.
+    let linear = dir.join("linear");
+    let out = rheodem(&[
+        "contact",
+        "curve",
+        "--law",
+        "linear",
+        "--param",
+        "range=1e-4",
+        "--out",
+        &linear.to_string_lossy(),
+    ]);
+    assert_success(&out);
+    let out = rheodem(&["contact", "curve", "--law", "willett", "--volume=-1e-12"]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        !out.status.success() && err.contains("--volume") && err.contains("zero or positive"),
+        "{err}"
+    );
+    let out = rheodem(&[
+        "contact",
+        "curve",
+        "--law",
+        "reversible",
+        "--param",
+        "volume=1",
+    ]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        !out.status.success() && err.contains("--param volume") && err.contains("max_force"),
+        "{err}"
+    );
+    let out = rheodem(&["contact", "curve", "--law", "glue"]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        !out.status.success() && err.contains("glue") && err.contains("liquid_bridge (willett"),
+        "{err}"
+    );
     let out = rheodem(&["contact", "equivalent", "--volume-nl", "75"]);
     assert!(out.status.success());
     assert!(String::from_utf8_lossy(&out.stdout).contains("0.2622"));

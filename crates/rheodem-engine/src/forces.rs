@@ -22,7 +22,7 @@ use crate::neighbor::NeighborList;
 use crate::observe::{ContactObserver, ContactView};
 use crate::particles::Particles;
 use crate::team::Team;
-use glam::DVec3;
+use glam::{DMat3, DVec3};
 
 /// Per-thread force buffers, reused between steps (not part of the simulation state).
 #[derive(Clone, Debug, Default)]
@@ -85,7 +85,9 @@ struct Inputs<'a> {
     /// The largest range beyond contact of the laws that act on pairs apart without a
     /// bridge (reversible adhesion; m).
     free_range: f64,
-    flow_rate: f64,
+    /// The boundary's mean-flow velocity gradient `L` (1/s) that contacts subtract as
+    /// `L b` (`b` the branch); `None` when they do not.
+    mean_flow: Option<DMat3>,
     dt: f64,
     /// Whether to run the plain copy of the loop even where the CPU has AVX2.
     plain: bool,
@@ -94,8 +96,10 @@ struct Inputs<'a> {
 }
 
 /// Zeroes the particle forces and torques and adds every pair force of the list, advancing
-/// contact history over `dt` (s). `flow_rate` (1/s) is subtracted as `γ̇ l_y x̂` from each
-/// contact's relative velocity (zero in the lab frame; see `LeesEdwards::peculiar_contacts`).
+/// contact history over `dt` (s). `mean_flow` is the boundary's mean-flow velocity gradient
+/// `L` (1/s) when contacts measure their relative velocity against the mean flow: `L b` is
+/// then subtracted from each contact's relative velocity (`b` its branch); `None` in the lab
+/// frame (see `Domain::contact_velocity_gradient`).
 /// Every interacting pair is shown to the observer `O`, whose merged observations are
 /// returned. The chunks are shared among the members of `team`. The list must have been
 /// checked ([`NeighborList::needs_rebuild`], and rebuilt if need be) since the particles
@@ -107,13 +111,13 @@ pub fn pair_forces<O: ContactObserver>(
     list: &mut NeighborList,
     laws: &ContactTable,
     images: &[ImageTransform; IMAGE_COUNT],
-    flow_rate: f64,
+    mean_flow: Option<DMat3>,
     dt: f64,
     scratch: &mut ForceScratch,
     team: &Team,
 ) -> O {
     pair_forces_in::<O>(
-        particles, list, laws, images, flow_rate, dt, scratch, team, false,
+        particles, list, laws, images, mean_flow, dt, scratch, team, false,
     )
 }
 
@@ -125,7 +129,7 @@ fn pair_forces_in<O: ContactObserver>(
     list: &mut NeighborList,
     laws: &ContactTable,
     images: &[ImageTransform; IMAGE_COUNT],
-    flow_rate: f64,
+    mean_flow: Option<DMat3>,
     dt: f64,
     scratch: &mut ForceScratch,
     team: &Team,
@@ -173,7 +177,7 @@ fn pair_forces_in<O: ContactObserver>(
         laws,
         max_range: laws.max_range(),
         free_range: laws.free_range(),
-        flow_rate,
+        mean_flow,
         dt,
         plain,
         prune: (slices.prune.stamp, slices.prune.margin),
@@ -931,6 +935,17 @@ impl Inputs<'_> {
         self.through_image(code, v, w)
     }
 
+    /// The relative velocity (m/s) a contact with branch `branch` (m) sees, from the
+    /// difference `dv` (m/s) of the stored velocities: less the mean flow's difference
+    /// across the pair where contacts measure against it.
+    #[inline(always)]
+    fn relative_velocity(&self, dv: DVec3, branch: DVec3) -> DVec3 {
+        match self.mean_flow {
+            Some(gradient) => dv - gradient * branch,
+            None => dv,
+        }
+    }
+
     /// The kinematics of a pair at distance `dist` (m; `overlap` of either sign).
     #[inline(always)]
     fn kinematics(&self, i: usize, j: usize, code: u8, branch: DVec3, dist: f64) -> PairKinematics {
@@ -940,7 +955,7 @@ impl Inputs<'_> {
             overlap: self.radius[i] + self.radius[j] - dist,
             radius_i: self.radius[i],
             radius_j: self.radius[j],
-            velocity: self.velocity[i] - v_j - DVec3::new(self.flow_rate * branch.y, 0.0, 0.0),
+            velocity: self.relative_velocity(self.velocity[i] - v_j, branch),
             omega_i: self.omega[i],
             omega_j: w_j,
             reduced_mass: 1.0 / (self.inv_mass[i] + self.inv_mass[j]),
@@ -1110,8 +1125,7 @@ fn touch_batch<O: ContactObserver, const AVX: bool>(
             dist[l] = c.dist;
             radius_i[l] = at(inp.radius, i);
             radius_j[l] = at(inp.radius, j);
-            velocity[l] =
-                at(inp.velocity, i) - v_j - DVec3::new(inp.flow_rate * c.branch.y, 0.0, 0.0);
+            velocity[l] = inp.relative_velocity(at(inp.velocity, i) - v_j, c.branch);
             omega_i[l] = at(inp.omega, i);
             omega_j[l] = w_j;
             inv_mass_i[l] = at(inp.inv_mass, i);
@@ -1206,8 +1220,9 @@ fn touch_batch<O: ContactObserver, const AVX: bool>(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::contact::standard::{BenchCohesion, bench_law};
+    use crate::contact::standard::{bench_adhesion, bench_law};
     use crate::contact::{Adhesion, ContactHistory, ContactLaw, Resistance};
+    use crate::contact::{LawKind, LinearIrreversible};
     use crate::domain::Domain;
     use crate::particles::{Motion, Sphere};
     use rand::{RngExt, SeedableRng};
@@ -1308,7 +1323,7 @@ mod tests {
     /// skin (the same bits on one thread, where the pairs that act meet in the same order).
     #[test]
     fn a_list_without_idle_pairs_apart_gives_the_forces_of_the_full_list() {
-        let willett = BenchCohesion::LiquidBridge.adhesion();
+        let willett = bench_adhesion(LawKind::LiquidBridge);
         let laws = ContactTable::uniform(1, law(willett, true));
         assert_eq!(laws.free_range(), 0.0);
         let (range, dt) = (laws.max_range(), 1e-4);
@@ -1344,7 +1359,7 @@ mod tests {
                     }
                 }
                 for (p, list) in [(&mut p_short, &mut short), (&mut p_full, &mut full)] {
-                    pair_forces::<()>(p, list, &laws, &images, 0.0, dt, &mut scratch, &team);
+                    pair_forces::<()>(p, list, &laws, &images, None, dt, &mut scratch, &team);
                 }
                 let scale = p_full.force.iter().map(|f| f.length()).fold(0.0, f64::max);
                 for k in 0..p_full.len() {
@@ -1378,10 +1393,10 @@ mod tests {
     fn the_pairs_kept_by_a_prune_give_the_bits_of_the_whole_list() {
         let tables = [
             ("frictional", law(Adhesion::None, false)),
-            ("Willett", law(BenchCohesion::LiquidBridge.adhesion(), true)),
+            ("Willett", law(bench_adhesion(LawKind::LiquidBridge), true)),
             (
                 "reversible",
-                law(BenchCohesion::Reversible.adhesion(), false),
+                law(bench_adhesion(LawKind::Reversible), false),
             ),
         ];
         let dt = 1e-3;
@@ -1418,7 +1433,7 @@ mod tests {
                         &mut whole,
                         &laws,
                         &images,
-                        0.0,
+                        None,
                         dt,
                         &mut ForceScratch::default(),
                         &team,
@@ -1428,7 +1443,7 @@ mod tests {
                         &mut list,
                         &laws,
                         &images,
-                        0.0,
+                        None,
                         dt,
                         &mut scratch,
                         &team,
@@ -1493,12 +1508,12 @@ mod tests {
 
     #[test]
     fn the_pair_loop_gives_the_scalar_law_pair_by_pair() {
-        let willett = BenchCohesion::LiquidBridge.adhesion();
-        let reversible = BenchCohesion::Reversible.adhesion();
-        let linear = Adhesion::LinearIrreversible {
+        let willett = bench_adhesion(LawKind::LiquidBridge);
+        let reversible = bench_adhesion(LawKind::Reversible);
+        let linear = Adhesion::LinearIrreversible(LinearIrreversible {
             max_force: 185.0,
             stiffness: 2000.0,
-        };
+        });
         // A table where some pairs form bridges and others do not, with rotation springs
         // on a third kind: the loop's per-pair paths (lanes of mixed kernels).
         let mut mixed = ContactTable::uniform(2, law(willett, false));
@@ -1550,7 +1565,7 @@ mod tests {
                         &mut list_plain,
                         laws,
                         &domain.image_transforms(),
-                        0.0,
+                        None,
                         dt,
                         &mut ForceScratch::default(),
                         &team,
@@ -1561,7 +1576,7 @@ mod tests {
                         &mut list,
                         laws,
                         &domain.image_transforms(),
-                        0.0,
+                        None,
                         dt,
                         &mut scratch,
                         &team,

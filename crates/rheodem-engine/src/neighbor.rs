@@ -1387,7 +1387,7 @@ mod tests {
             &mut list,
             &crate::contact::ContactTable::uniform(1, law),
             &domain.image_transforms(),
-            0.0,
+            None,
             1e-4,
             &mut crate::forces::ForceScratch::default(),
             &team,

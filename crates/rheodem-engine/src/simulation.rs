@@ -310,7 +310,7 @@ impl Simulation {
     /// measurements defined outside the engine (contact snapshots, coarse-graining).
     pub fn compute_forces_with<O: ContactObserver>(&mut self) -> O {
         let images = self.domain.image_transforms();
-        let flow = self.domain.contact_flow_rate();
+        let flow = self.domain.contact_velocity_gradient();
         let team = self.team.get();
         let (p, nb, laws, dt, scratch) = (
             &mut self.particles,

@@ -5,8 +5,8 @@
 //! sheared at `γ̇ = 1` through Lees-Edwards boundaries (shear `x`, gradient `y`).
 
 use crate::Simulation;
-pub use crate::contact::standard::{BenchCohesion, bench_law};
-use crate::contact::{ContactLaw, ContactTable};
+pub use crate::contact::standard::{BENCH_STRENGTH, bench_adhesion, bench_law};
+use crate::contact::{ContactLaw, ContactTable, LawKind};
 use crate::domain::Domain;
 use crate::io::packing::parse_packing;
 use crate::particles::{Motion, Particles, Sphere};
@@ -27,8 +27,8 @@ pub const PACKING: &str = include_str!("../data/bench-packing.txt");
 pub const DEFAULT_SKIN: f64 = 0.2;
 
 /// Builds the standard problem sheared at `shear_rate` (model units) with the given
-/// cohesion and Verlet skin (model units).
-pub fn standard_problem(shear_rate: f64, cohesion: BenchCohesion, skin: f64) -> Simulation {
+/// adhesive law at the bench strength ([`BENCH_STRENGTH`]) and Verlet skin (model units).
+pub fn standard_problem(shear_rate: f64, cohesion: LawKind, skin: f64) -> Simulation {
     let packing = parse_packing(PACKING).expect("the shipped packing is valid");
     let edge = packing
         .box_edge
@@ -55,7 +55,7 @@ pub fn standard_problem(shear_rate: f64, cohesion: BenchCohesion, skin: f64) -> 
         ContactTable::uniform(
             1,
             ContactLaw {
-                adhesion: cohesion.adhesion(),
+                adhesion: bench_adhesion(cohesion),
                 ..bench_law()
             },
         ),

@@ -29,6 +29,7 @@ use glam::DVec3;
 use rheodem::contact::curve::{CurvePoint, drive, ramp, standard_cycle};
 use rheodem::contact::equivalent::equivalent_linear;
 use rheodem::contact::{Adhesion, ContactLaw};
+use rheodem::contact::{LinearIrreversible, LiquidBridge, Reversible};
 use std::f64::consts::PI;
 
 const A_I: f64 = 1.1e-3;
@@ -97,11 +98,11 @@ fn theta() -> f64 {
 }
 
 fn bridge_law(volume: f64) -> Adhesion {
-    Adhesion::LiquidBridge {
+    Adhesion::LiquidBridge(LiquidBridge {
         surface_tension: GAMMA_S,
         contact_angle: theta(),
         volume,
-    }
+    })
 }
 
 /// The contact law: undamped frictionless linear spring (`k_n = KN`) plus `adhesion`.
@@ -181,10 +182,10 @@ fn three_laws(a_i: f64, a_j: f64) -> Vec<(&'static str, Adhesion, Expected)> {
     vec![
         (
             "reversible",
-            Adhesion::Reversible {
+            Adhesion::Reversible(Reversible {
                 max_force: f_rev,
                 stiffness: k_rev,
-            },
+            }),
             Expected::Reversible {
                 f_max: f_rev,
                 k_c: k_rev,
@@ -193,10 +194,10 @@ fn three_laws(a_i: f64, a_j: f64) -> Vec<(&'static str, Adhesion, Expected)> {
         ("liquid bridge", bridge_law(V_75NL), Expected::Bridge(w)),
         (
             "linear irreversible",
-            Adhesion::LinearIrreversible {
+            Adhesion::LinearIrreversible(LinearIrreversible {
                 max_force: w.f_max,
                 stiffness: k_lin,
-            },
+            }),
             Expected::Linear {
                 f_max: w.f_max,
                 k_c: k_lin,

@@ -17,7 +17,8 @@ mod common;
 use common::*;
 use glam::DVec3;
 use rheodem::Simulation;
-use rheodem::bench::{BenchCohesion, standard_problem};
+use rheodem::bench::standard_problem;
+use rheodem::contact::LawKind;
 use rheodem::domain::{Domain, ShearDynamics};
 
 /// Lower corner of the test box, off the origin (m).
@@ -197,7 +198,7 @@ fn momentum(sim: &Simulation) -> DVec3 {
 /// the largest `|Σ F| / Σ |F_i|`, the largest change of `Σ m c` relative to `M γ̇ L_y`
 /// (`c` the velocity relative to the mean flow), and the mean `σ_xy` (Pa) of the second half.
 fn sheared_standard_problem(dynamics: ShearDynamics, steps: u64) -> (Simulation, f64, f64, f64) {
-    let mut sim = standard_problem(1.0, BenchCohesion::None, 0.2);
+    let mut sim = standard_problem(1.0, LawKind::None, 0.2);
     // The problem starts with the lab profile; re-express its velocities for the dynamics.
     let lab = sim.domain.clone();
     if let Some(le) = &mut sim.domain.lees_edwards {

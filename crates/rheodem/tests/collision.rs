@@ -4,6 +4,7 @@ mod common;
 
 use common::*;
 use glam::DVec3;
+use rheodem::contact::Reversible;
 use rheodem::particles::Motion;
 use std::f64::consts::PI;
 
@@ -131,10 +132,10 @@ fn history_survives_rebuilds_and_resorting() {
         );
         s2.angular_velocity = DVec3::new(0.0, 0.0, 3.0);
         let mut law = frictional_law(0.8, 0.5);
-        law.adhesion = rheodem::contact::Adhesion::Reversible {
+        law.adhesion = rheodem::contact::Adhesion::Reversible(Reversible {
             max_force: 1e-4,
             stiffness: 100.0,
-        };
+        });
         let t_c = law.normal.contact_time(1e-6).expect("underdamped");
         simulation(
             &[s2, s1],

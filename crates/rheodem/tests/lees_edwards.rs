@@ -31,7 +31,8 @@ mod common;
 use common::*;
 use glam::DVec3;
 use rheodem::Simulation;
-use rheodem::bench::{BenchCohesion, standard_problem};
+use rheodem::bench::standard_problem;
+use rheodem::contact::LawKind;
 use rheodem::contact::{ContactHistory, ContactLaw, PairKinematics, Resistance};
 use rheodem::domain::{Domain, ShearDynamics};
 use rheodem::measure::kinetic_stress_sum;
@@ -430,7 +431,7 @@ impl LabFrameRule {
 #[test]
 fn total_force_vanishes_and_peculiar_momentum_is_conserved() {
     let clock = Instant::now();
-    let mut sim = standard_problem(1.0, BenchCohesion::None, 0.2);
+    let mut sim = standard_problem(1.0, LawKind::None, 0.2);
     let steps = 2000;
     let q0 = peculiar_momentum(&sim);
     let total_mass: f64 = sim.particles.mass.iter().sum();

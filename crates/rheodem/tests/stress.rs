@@ -16,6 +16,7 @@
 
 use glam::{DMat3, DVec3};
 use rheodem::Simulation;
+use rheodem::contact::Reversible;
 use rheodem::contact::{Adhesion, ContactLaw, ContactTable, Damping, NormalLaw, Resistance};
 use rheodem::domain::Domain;
 use rheodem::forces::{ForceScratch, pair_forces};
@@ -63,10 +64,10 @@ fn law(adhesive: bool) -> ContactLaw {
         rolling: Resistance::NONE,
         torsion: Resistance::NONE,
         adhesion: if adhesive {
-            Adhesion::Reversible {
+            Adhesion::Reversible(Reversible {
                 max_force: F_MAX,
                 stiffness: K_C,
-            }
+            })
         } else {
             Adhesion::None
         },
@@ -209,7 +210,7 @@ fn measured_pairs(
         &mut list,
         &ContactTable::uniform(1, law),
         &domain.image_transforms(),
-        0.0,
+        None,
         DT,
         &mut ForceScratch::default(),
         &team,

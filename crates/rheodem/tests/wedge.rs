@@ -18,6 +18,7 @@ use glam::{DMat3, DVec3};
 use rand::RngExt;
 use rheodem::Simulation;
 use rheodem::contact::{Adhesion, ContactLaw, ContactTable, Damping, NormalLaw, Resistance};
+use rheodem::contact::{LiquidBridge, Reversible};
 use rheodem::domain::Domain;
 use rheodem::measure::angular_momentum;
 use rheodem::neighbor::{NeighborError, min_wedge_angle};
@@ -102,10 +103,10 @@ fn bonded_law() -> ContactLaw {
     };
     law.rolling = r;
     law.torsion = r;
-    law.adhesion = Adhesion::Reversible {
+    law.adhesion = Adhesion::Reversible(Reversible {
         max_force: F_MAX,
         stiffness: 10.0,
-    };
+    });
     law
 }
 
@@ -888,11 +889,11 @@ fn live_history(sim: &mut Simulation) -> (usize, usize) {
 #[test]
 fn insertion_keeps_every_spring_and_bridge() {
     let mut law = frictional_law(0.5, 0.5);
-    law.adhesion = Adhesion::LiquidBridge {
+    law.adhesion = Adhesion::LiquidBridge(LiquidBridge {
         surface_tension: 0.02,
         contact_angle: 0.3,
         volume: 1.0e-12,
-    };
+    });
     let (angle, ri, ro) = (PI / 3.0, 0.01, 0.022);
     let spheres = wedge_lattice(angle, ri, ro, 0.0, 60, 0.1, -0.1, 50.0, 0.1, 2.4, 5);
     let tagged: Vec<(Sphere, u16)> = spheres.iter().map(|s| (*s, NO_PART)).collect();
@@ -997,10 +998,10 @@ fn insertion_keeps_every_spring_and_bridge() {
 #[test]
 fn too_narrow_wedge_is_refused() {
     let mut law = normal_law(0.8);
-    law.adhesion = Adhesion::Reversible {
+    law.adhesion = Adhesion::Reversible(Reversible {
         max_force: 1.0e-4,
         stiffness: 1.0,
-    };
+    });
     let reach = 2.0 * 1.1 * A + law.range();
     let build = |angle: f64, inner: f64| {
         let s = sphere(DVec3::new(inner + 0.002, 0.0, 0.0), DVec3::ZERO, 1.1 * A);

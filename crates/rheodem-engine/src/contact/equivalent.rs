@@ -3,7 +3,7 @@
 //! same maximum force and (a) the same interaction distance, or (b) the same adhesive
 //! energy per contact `E = ∫₀^{S_c} |f_a| dS`.
 
-use super::adhesion::Adhesion;
+use super::adhesion::{Adhesion, LiquidBridge};
 use serde::Serialize;
 
 /// The bridge's characteristics and the two equivalent linear stiffnesses.
@@ -36,11 +36,11 @@ pub fn equivalent_linear(
     a_i: f64,
     a_j: f64,
 ) -> Option<Equivalent> {
-    let bridge = Adhesion::LiquidBridge {
+    let bridge = Adhesion::LiquidBridge(LiquidBridge {
         surface_tension,
         contact_angle,
         volume,
-    };
+    });
     let f_max = bridge.max_force(a_i, a_j);
     let s_c = bridge.range();
     if !(f_max > 0.0 && s_c > 0.0 && f_max.is_finite() && s_c.is_finite()) {

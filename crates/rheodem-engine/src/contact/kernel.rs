@@ -1,7 +1,7 @@
 //! A species pair's contact law resolved once for the pair loop.
 //!
 //! [`ContactLaw`] is the law as stored and serialised: its parts say what they are
-//! (`Adhesion::LiquidBridge { surface_tension, contact_angle, volume }`). The pair loop needs
+//! (`Adhesion::LiquidBridge(LiquidBridge { surface_tension, contact_angle, volume })`). The pair loop needs
 //! other numbers: `2π γ_s cos θ`, the rupture distance `(1 + θ/2) V_b^{1/3}`, `1/V_b`, and
 //! which parts act at all. A [`PairKernel`] holds them, derived from the law when a
 //! [`super::ContactTable`] is built or changed and never serialised, so that nothing fixed

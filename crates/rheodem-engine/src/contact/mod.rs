@@ -24,7 +24,9 @@ use crate::domain::ImageTransform;
 use glam::DVec3;
 use serde::{Deserialize, Serialize};
 
-pub use adhesion::Adhesion;
+pub use adhesion::{
+    Adhesion, LawKind, LawSpec, LinearIrreversible, LiquidBridge, Reversible, Strength,
+};
 pub use friction::Resistance;
 pub use kernel::PairKernel;
 pub use normal::{Damping, NormalLaw};
@@ -151,6 +153,7 @@ impl ContactLaw {
     /// use glam::DVec3;
     /// use rheodem_engine::contact::{
     ///     Adhesion, ContactHistory, ContactLaw, Damping, NormalLaw, PairKinematics, Resistance,
+    ///     Reversible,
     /// };
     ///
     /// let law = ContactLaw {
@@ -158,7 +161,7 @@ impl ContactLaw {
     ///     tangential: Resistance::NONE,
     ///     rolling: Resistance::NONE,
     ///     torsion: Resistance::NONE,
-    ///     adhesion: Adhesion::Reversible { max_force: 1.0e-3, stiffness: 10.0 },
+    ///     adhesion: Adhesion::Reversible(Reversible { max_force: 1.0e-3, stiffness: 10.0 }),
     /// };
     /// assert_eq!(law.range(), 1.0e-4);
     /// let at = |overlap: f64| PairKinematics {

@@ -2,7 +2,7 @@
 //! is built by the `rheodem` crate's `bench` module), in model units: the frictional law
 //! and its cohesive variants. The force loop's tests use them too.
 
-use super::{Adhesion, ContactLaw, Damping, NormalLaw, Resistance};
+use super::{Adhesion, ContactLaw, Damping, LawKind, LawSpec, NormalLaw, Resistance, Strength};
 
 /// The bench's contact law: `k_n = 10⁴`, `k_t = 2/7 k_n`, `γ_n = 27.6941 m_ij`, no
 /// tangential damping, `μ = 0.5`.
@@ -27,40 +27,54 @@ pub fn bench_law() -> ContactLaw {
     }
 }
 
-/// Cohesion variants of the standard problem (their cost targets are in BENCHMARKS.md).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum BenchCohesion {
-    /// The plain frictional law.
-    None,
-    /// Reversible adhesion, `f_a^max = p d² = 185` (`Bo ≈ 1` at the steady mean stress
-    /// `p ≈ 185`, `d = 1`), `k_c = k_n`.
-    Reversible,
-    /// Willett bridges with the same `f_a^max` for the mean pair (`r = 0.5`, `θ = 20°`) and
-    /// `S_c = 0.225 d`.
-    LiquidBridge,
+/// The adhesive strength of the standard problem's cohesive variants (model units; their
+/// cost targets are in BENCHMARKS.md): `f_a^max = p d² = 185` for the mean pair (`Bo ≈ 1`
+/// at the steady mean stress `p ≈ 185`, `d = 1`), a rupture distance `0.225 d` for laws
+/// with a range of their own, `k_c = k_n` for the reversible law.
+pub const BENCH_STRENGTH: Strength = Strength {
+    max_force: 185.0,
+    rupture_distance: 0.225,
+    normal_stiffness: 1.0e4,
+    mean_diameter: 1.0,
+};
+
+/// The adhesive law `kind` at the bench's strength ([`BENCH_STRENGTH`]); no adhesion for
+/// [`LawKind::None`].
+pub fn bench_adhesion(kind: LawKind) -> Adhesion {
+    LawSpec::new(kind, kind.at_strength(&BENCH_STRENGTH))
+        .build()
+        .expect("the bench strength is valid for every law")
 }
 
-/// `f_a^max` of the cohesive variants (model units).
-const BENCH_MAX_FORCE: f64 = 185.0;
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::contact::adhesion::LAWS;
 
-impl BenchCohesion {
-    /// The adhesive law of the variant.
-    pub fn adhesion(self) -> Adhesion {
-        match self {
-            BenchCohesion::None => Adhesion::None,
-            BenchCohesion::Reversible => Adhesion::Reversible {
-                max_force: BENCH_MAX_FORCE,
-                stiffness: 1.0e4,
-            },
-            BenchCohesion::LiquidBridge => {
-                let theta = 20f64.to_radians();
-                Adhesion::LiquidBridge {
-                    surface_tension: BENCH_MAX_FORCE
-                        / (2.0 * std::f64::consts::PI * 0.5 * theta.cos()),
-                    contact_angle: theta,
-                    volume: (0.225 / (1.0 + 0.5 * theta)).powi(3),
-                }
-            }
+    #[test]
+    fn every_law_at_the_bench_strength_pulls_the_mean_pair_with_its_max_force() {
+        for law in LAWS {
+            let adhesion = bench_adhesion(law.kind);
+            let expected = if law.kind == LawKind::None {
+                0.0
+            } else {
+                185.0
+            };
+            assert!(
+                (adhesion.max_force(0.5, 0.5) - expected).abs() < 1e-12,
+                "{}",
+                law.name
+            );
         }
+        // The bench's earlier constants, bit for bit.
+        let theta = 20f64.to_radians();
+        assert_eq!(
+            bench_adhesion(LawKind::LiquidBridge),
+            Adhesion::LiquidBridge(crate::contact::LiquidBridge {
+                surface_tension: 185.0 / (2.0 * std::f64::consts::PI * 0.5 * theta.cos()),
+                contact_angle: theta,
+                volume: (0.225 / (1.0 + 0.5 * theta)).powi(3),
+            })
+        );
     }
 }

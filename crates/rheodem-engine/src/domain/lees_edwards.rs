@@ -1,7 +1,7 @@
 //! Lees-Edwards boundaries (docs/model.md §4.3–4.5): shear along `x`, gradient along `y`;
 //! the images across `y` are shifted along `x` and, in the lab frame, move faster along `x`.
 
-use glam::DVec3;
+use glam::{DMat3, DVec3};
 use serde::{Deserialize, Serialize};
 
 /// How a Lees-Edwards box moves its particles and what their stored velocities mean
@@ -134,6 +134,16 @@ impl LeesEdwards {
     #[inline]
     pub fn mean_flow(&self, height: f64) -> DVec3 {
         DVec3::new(self.shear_rate * height, 0.0, 0.0)
+    }
+
+    /// The mean flow's velocity gradient (1/s), `L_ab = ∂v_a/∂r_b`: `γ̇` in `L_xy`, zero
+    /// elsewhere, so that `L b` is the mean flow's difference across a branch `b`.
+    pub fn velocity_gradient(&self) -> DMat3 {
+        DMat3::from_cols(
+            DVec3::ZERO,
+            DVec3::new(self.shear_rate, 0.0, 0.0),
+            DVec3::ZERO,
+        )
     }
 
     /// Advances the shift over `dt` (s) in a box of edges `l` (m), `s += γ̇ L_y dt`, brought

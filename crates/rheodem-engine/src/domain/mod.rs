@@ -174,12 +174,14 @@ impl Domain {
         }
     }
 
-    /// Rate `γ̇` (1/s) of the mean-flow difference that contacts subtract from their
-    /// relative velocity: non-zero only with peculiar contacts (docs/model.md §4.4).
-    pub fn contact_flow_rate(&self) -> f64 {
+    /// The mean flow's velocity gradient `L` (1/s) that contacts subtract, as `L b`, from
+    /// the relative velocity of a pair with branch `b`: the boundary's, where contacts
+    /// measure against the mean flow (Lees-Edwards with peculiar contacts, docs/model.md
+    /// §4.4); `None` otherwise.
+    pub fn contact_velocity_gradient(&self) -> Option<DMat3> {
         self.lees_edwards
             .filter(|le| le.dynamics == ShearDynamics::PeculiarContacts)
-            .map_or(0.0, |le| le.shear_rate)
+            .map(|le| le.velocity_gradient())
     }
 
     /// How often the image codes have changed meaning (Lees-Edwards shift wraps).

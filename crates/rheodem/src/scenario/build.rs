@@ -4,7 +4,8 @@ use super::prepare::{PreparationReport, Target, prepare};
 use super::spec::*;
 use super::{ScenarioError, invalid};
 use crate::Simulation;
-use crate::contact::{Adhesion, ContactLaw, ContactTable, Damping, NormalLaw, Resistance};
+use crate::contact::adhesion::LawError;
+use crate::contact::{Adhesion, ContactLaw, ContactTable, Damping, LawSpec, NormalLaw, Resistance};
 use crate::domain::{Domain, ShearDynamics};
 use crate::generate::{
     MAX_INSERTION_FRACTION, Obstacle, Rng, gaussian_vector, insert_random, polydisperse_radii,
@@ -277,85 +278,21 @@ fn resistance(
     })
 }
 
-fn adhesion(key: &str, spec: &Option<AdhesionSpec>) -> Result<Adhesion, ScenarioError> {
-    let linear = |max_force: f64,
-                  stiffness: Option<f64>,
-                  range: Option<f64>|
-     -> Result<(f64, f64), ScenarioError> {
-        let f = positive(&format!("{key}.max_force"), max_force)?;
-        at_most_one(
-            key,
-            &[
-                ("stiffness", stiffness.is_some()),
-                ("range", range.is_some()),
-            ],
-        )?;
-        let k = match (stiffness, range) {
-            (Some(k), _) => positive(&format!("{key}.stiffness"), k)?,
-            (None, Some(r)) => f / positive(&format!("{key}.range"), r)?,
-            (None, None) => {
-                return Err(invalid(
-                    format!("{key}.stiffness"),
-                    "(missing)",
-                    "give `stiffness` (N/m) or `range` (m)",
-                ));
-            }
-        };
-        Ok((f, k))
+fn adhesion(key: &str, spec: &Option<LawSpec>) -> Result<Adhesion, ScenarioError> {
+    match spec {
+        None => Ok(Adhesion::None),
+        Some(spec) => spec.build().map_err(|e| law_error(key, e)),
+    }
+}
+
+/// A law's parameter error as a scenario error under `key` (the law's table).
+pub fn law_error(key: &str, e: LawError) -> ScenarioError {
+    let key = if e.key.is_empty() {
+        key.to_string()
+    } else {
+        format!("{key}.{}", e.key)
     };
-    Ok(match spec {
-        None => Adhesion::None,
-        Some(AdhesionSpec::Reversible {
-            max_force,
-            stiffness,
-            range,
-        }) => {
-            let (max_force, stiffness) = linear(*max_force, *stiffness, *range)?;
-            Adhesion::Reversible {
-                max_force,
-                stiffness,
-            }
-        }
-        Some(AdhesionSpec::LinearIrreversible {
-            max_force,
-            stiffness,
-            range,
-        }) => {
-            let (max_force, stiffness) = linear(*max_force, *stiffness, *range)?;
-            Adhesion::LinearIrreversible {
-                max_force,
-                stiffness,
-            }
-        }
-        Some(AdhesionSpec::LiquidBridge {
-            surface_tension,
-            contact_angle_deg,
-            volume,
-        }) => {
-            let gamma = positive(&format!("{key}.surface_tension"), *surface_tension)?;
-            let theta = *contact_angle_deg;
-            if !(theta.is_finite() && (0.0..90.0).contains(&theta)) {
-                return Err(invalid(
-                    format!("{key}.contact_angle_deg"),
-                    theta,
-                    "must lie in [0, 90) degrees: a bridge with θ ≥ 90° does not attract",
-                ));
-            }
-            let v = non_negative(&format!("{key}.volume"), *volume).map_err(|_| {
-                invalid(
-                    format!("{key}.volume"),
-                    volume,
-                    "must be zero or positive (m³); 0 is the contact-only limit (attraction \
-                     while touching, none apart)",
-                )
-            })?;
-            Adhesion::LiquidBridge {
-                surface_tension: gamma,
-                contact_angle: theta.to_radians(),
-                volume: v,
-            }
-        }
-    })
+    invalid(key, e.value, e.reason)
 }
 
 /// The validated contact laws of a scenario, indexed by species in declaration order.

@@ -6,7 +6,7 @@ mod prepare;
 pub mod size;
 pub mod spec;
 
-pub use build::{Built, Checked, MAX_STEPS, Resolved, build, check, contact_table};
+pub use build::{Built, Checked, MAX_STEPS, Resolved, build, check, contact_table, law_error};
 pub use prepare::PreparationReport;
 pub use spec::Scenario;
 

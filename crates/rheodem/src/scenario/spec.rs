@@ -23,6 +23,7 @@
 //! duration = 0.05
 //! ```
 
+pub use crate::contact::LawSpec;
 use crate::domain::ShearDynamics;
 use serde::{Deserialize, Serialize};
 
@@ -192,46 +193,10 @@ pub struct ContactSpec {
     /// Torsion resistance; omitted for none.
     #[serde(default)]
     pub torsion: Option<ResistanceSpec>,
-    /// Adhesive law; omitted for none.
+    /// Adhesive law by name with its parameters (docs/model.md §2.4–2.6); omitted for
+    /// none.
     #[serde(default)]
-    pub adhesion: Option<AdhesionSpec>,
-}
-
-/// An adhesive law (docs/model.md §2.4–2.6), chosen by `law`.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(tag = "law", rename_all = "snake_case", deny_unknown_fields)]
-pub enum AdhesionSpec {
-    /// Reversible linear ("dry") adhesion: give `max_force` and `stiffness` or `range`.
-    Reversible {
-        /// `f_a^max` (N).
-        max_force: f64,
-        /// `k_c^a` (N/m).
-        #[serde(default)]
-        stiffness: Option<f64>,
-        /// `δ_a = f_a^max / k_c^a` (m), instead of `stiffness`.
-        #[serde(default)]
-        range: Option<f64>,
-    },
-    /// Irreversible Willett liquid bridge ("wet").
-    LiquidBridge {
-        /// Surface tension `γ_s` (N/m).
-        surface_tension: f64,
-        /// Contact angle `θ` (degrees), in `[0, 90)`.
-        contact_angle_deg: f64,
-        /// Bridge volume `V_b` (m³).
-        volume: f64,
-    },
-    /// Irreversible linear adhesion: give `max_force` and `stiffness` or `range` (`S_c`).
-    LinearIrreversible {
-        /// `f_a^max` (N).
-        max_force: f64,
-        /// `k_c` (N/m).
-        #[serde(default)]
-        stiffness: Option<f64>,
-        /// `S_c = f_a^max / k_c` (m), instead of `stiffness`.
-        #[serde(default)]
-        range: Option<f64>,
-    },
+    pub adhesion: Option<LawSpec>,
 }
 
 /// Linear visco-elastic normal force. At most one of `restitution`, `damping`,

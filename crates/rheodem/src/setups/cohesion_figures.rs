@@ -13,8 +13,8 @@
 //! out (the laws describe that one); of several runs of one state the longest counts.
 
 use super::phase_diagram::{Figure, Group, delta_phi_points, group_figure, longest_runs};
-use super::shear_box::Cohesion;
 use super::sweep::PointResult;
+use crate::contact::LawKind;
 use crate::domain::ShearDynamics;
 use crate::plot::Labels;
 use crate::rheology::PhiLaw;
@@ -73,7 +73,7 @@ pub fn cohesion_figures(
     softness: f64,
 ) -> Result<Vec<Figure>, String> {
     let mut out = Vec::new();
-    let usable = |r: &&PointResult| r.spec.cohesion == Cohesion::Reversible || r.spec.bond == 0.0;
+    let usable = |r: &&PointResult| r.spec.cohesion == LawKind::Reversible || r.spec.bond == 0.0;
     let deltas = delta_phi_points(
         &results.iter().filter(usable).cloned().collect::<Vec<_>>(),
         inertial,

@@ -14,44 +14,13 @@
 
 use crate::analysis::{Estimate, block_average, halves_agree};
 use crate::cg::{FieldPoint, KernelShape, Material};
+use crate::contact::{LawKind, LawSpec, Strength};
 use crate::domain::ShearDynamics;
 use crate::measure::Observables;
 use crate::scenario::spec::*;
 use crate::scenario::{ScenarioError, invalid};
 use serde::{Deserialize, Serialize};
 use std::f64::consts::PI;
-
-/// The adhesive law of the shear box.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum Cohesion {
-    /// Dry, non-cohesive.
-    #[default]
-    None,
-    /// Reversible linear adhesion with `k_c^a = k_n`.
-    Reversible,
-    /// Willett liquid bridges, `θ = 20°`, rupture distance `range · d_p`; `f_a^max` of the
-    /// mean pair (`r = d_p/2`) is `Bo p d_p²`.
-    LiquidBridge,
-    /// Linear irreversible adhesion with rupture distance `range · d_p`.
-    LinearIrreversible,
-}
-
-impl std::fmt::Display for Cohesion {
-    /// The law as a shear-box spec names it (`none`, `reversible`, `liquid_bridge`,
-    /// `linear_irreversible`).
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(match self {
-            Cohesion::None => "none",
-            Cohesion::Reversible => "reversible",
-            Cohesion::LiquidBridge => "liquid_bridge",
-            Cohesion::LinearIrreversible => "linear_irreversible",
-        })
-    }
-}
-
-/// Contact angle of the liquid-bridge option (degrees), as in Shi et al. 2020 and Roy et al. 2016.
-const BRIDGE_ANGLE_DEG: f64 = 20.0;
 
 fn default_range() -> f64 {
     0.225
@@ -109,9 +78,11 @@ pub struct ShearBoxSpec {
     /// Bond number `Bo = f_a^max / (p d_p²)`, in [0, 100].
     #[serde(default)]
     pub bond: f64,
-    /// Adhesive law (ignored when `bond = 0`).
+    /// Adhesive law, by its registered name (`none`, `reversible`, `liquid_bridge`,
+    /// `linear_irreversible`, …), at the point's strength: `f_a^max = Bo p d_p²` for the
+    /// mean pair, rupture at `range · d_p`, `k_c^a = k_n` (ignored when `bond = 0`).
     #[serde(default)]
-    pub cohesion: Cohesion,
+    pub cohesion: LawKind,
     /// Rupture distance of the irreversible laws in mean diameters, `S_c / d_p` (default
     /// 0.225, i.e. 75 nl at 2.2 mm).
     #[serde(default = "default_range")]
@@ -302,7 +273,7 @@ impl ShearBoxSpec {
                 "stores the fields' samples: it needs cg_slabs > 0",
             ));
         }
-        if bo > 0.0 && self.cohesion == Cohesion::None {
+        if bo > 0.0 && self.cohesion == LawKind::None {
             return Err(invalid(
                 "cohesion",
                 "\"none\"",
@@ -313,9 +284,10 @@ impl ShearBoxSpec {
         // holds the largest pair plus the attraction range and the skin (0.1 d_p). The
         // box edge is estimated at φ = 0.75, above every steady state of Shi et al. 2020.
         let (_, r_max) = radius_bounds(d, self.polydispersity);
-        let reach = match self.cohesion {
-            Cohesion::LiquidBridge | Cohesion::LinearIrreversible => range * d,
-            Cohesion::None | Cohesion::Reversible => 0.0,
+        let reach = if self.cohesion.forms_bridges() {
+            range * d
+        } else {
+            0.0
         };
         let cell = 2.0 * r_max + reach + 0.1 * d;
         let per_particle = 4.0 / 3.0 * PI * mean_radius_cubed(d, self.polydispersity) / 0.75;
@@ -356,31 +328,16 @@ impl ShearBoxSpec {
         // start looser (φ = 0.2 keeps N = 16 below the limit at 2.7 standard deviations).
         let loose = if self.particles >= 1000 { 0.3 } else { 0.2 };
         let edge = (solid / loose).cbrt();
-        let adhesion = if self.bond == 0.0 {
-            None
-        } else {
-            Some(match self.cohesion {
-                Cohesion::None => unreachable!("checked in derive"),
-                Cohesion::Reversible => AdhesionSpec::Reversible {
-                    max_force: dv.max_force,
-                    stiffness: Some(self.stiffness),
-                    range: None,
-                },
-                Cohesion::LinearIrreversible => AdhesionSpec::LinearIrreversible {
-                    max_force: dv.max_force,
-                    stiffness: None,
-                    range: Some(dv.rupture_distance),
-                },
-                Cohesion::LiquidBridge => {
-                    let theta = BRIDGE_ANGLE_DEG.to_radians();
-                    AdhesionSpec::LiquidBridge {
-                        surface_tension: dv.max_force / (2.0 * PI * 0.5 * d * theta.cos()),
-                        contact_angle_deg: BRIDGE_ANGLE_DEG,
-                        volume: (dv.rupture_distance / (1.0 + 0.5 * theta)).powi(3),
-                    }
-                }
-            })
+        // The law at the point's strength: `f_a^max = Bo p d_p²` for the mean pair, the
+        // rupture distance `range · d_p`, `k_c^a = k_n` (Shi et al. 2020).
+        let strength = Strength {
+            max_force: dv.max_force,
+            rupture_distance: dv.rupture_distance,
+            normal_stiffness: self.stiffness,
+            mean_diameter: d,
         };
+        let adhesion = (self.bond > 0.0)
+            .then(|| LawSpec::new(self.cohesion, self.cohesion.at_strength(&strength)));
         let friction = (self.mu_p > 0.0).then(|| ResistanceSpec {
             stiffness: None,
             stiffness_ratio: Some(2.0 / 7.0),

@@ -24,7 +24,9 @@ use crate::Simulation;
 use crate::analysis::{Estimate, block_average};
 use crate::band::{AzimuthalProfile, ErfFit, erf_profile, surface_height};
 use crate::cg::{CgSums, ContactRecord, ContactRecords, KernelShape};
-use crate::contact::{Adhesion, ContactLaw, ContactTable, Damping, NormalLaw, Resistance};
+use crate::contact::{
+    Adhesion, ContactLaw, ContactTable, Damping, LawKind, LawSpec, NormalLaw, Resistance,
+};
 use crate::domain::Domain;
 use crate::generate::{Rng, polydisperse_radii};
 use crate::io::atomic::write_atomic;
@@ -36,7 +38,7 @@ use crate::neighbor::min_wedge_angle;
 use crate::particles::{Motion, Particles, Sphere};
 use crate::plot::{Labels, Markers, Series, plot_svg};
 use crate::run::{RunError, io_err, lock, read_checkpoint, write_checkpoint};
-use crate::scenario::{ScenarioError, invalid};
+use crate::scenario::{ScenarioError, invalid, law_error};
 use crate::stage::{EndCondition, Verdict};
 use crate::timestep::shortest_contact_time;
 use crate::walls::{Wall, WallShape};
@@ -512,18 +514,18 @@ impl SplitBottomSpec {
                 surface_tension,
                 volume,
                 contact_angle_deg,
-            } => Adhesion::LiquidBridge {
+            } => Adhesion::LiquidBridge(crate::contact::LiquidBridge {
                 surface_tension,
                 contact_angle: contact_angle_deg.to_radians(),
                 volume,
-            },
+            }),
             Cohesion::Linear {
                 max_force,
                 stiffness,
-            } => Adhesion::LinearIrreversible {
+            } => Adhesion::LinearIrreversible(crate::contact::LinearIrreversible {
                 max_force,
                 stiffness,
-            },
+            }),
         };
         ContactLaw {
             normal: NormalLaw {
@@ -542,38 +544,46 @@ impl SplitBottomSpec {
         }
     }
 
+    /// The adhesive law by its registered name with its parameters, as the engine's
+    /// registry checks and builds it.
+    pub fn law_spec(&self) -> LawSpec {
+        match self.cohesion {
+            Cohesion::Dry => LawSpec::default(),
+            Cohesion::Willett {
+                surface_tension,
+                volume,
+                contact_angle_deg,
+            } => LawSpec::new(
+                LawKind::LiquidBridge,
+                [
+                    ("surface_tension", surface_tension),
+                    ("contact_angle_deg", contact_angle_deg),
+                    ("volume", volume),
+                ],
+            ),
+            Cohesion::Linear {
+                max_force,
+                stiffness,
+            } => LawSpec::new(
+                LawKind::LinearIrreversible,
+                [("max_force", max_force), ("stiffness", stiffness)],
+            ),
+        }
+    }
+
     /// Checks the adhesive law's values, and that its interaction range (the rupture
     /// distance `S_c`) stays below the mean diameter `d` (m): a longer range lets a bridge
     /// reach past a particle's neighbours, outside the laws' validity (docs/model.md §2.5).
     fn check_cohesion(&self, d: f64) -> Result<(), ScenarioError> {
         let range_key = match self.cohesion {
             Cohesion::Dry => return Ok(()),
-            Cohesion::Willett {
-                surface_tension,
-                volume,
-                contact_angle_deg,
-            } => {
-                positive("cohesion.surface_tension", surface_tension)?;
-                // 0: the contact-only limit (attraction while touching, none apart).
-                non_negative("cohesion.volume", volume)?;
-                if !(contact_angle_deg.is_finite() && (0.0..90.0).contains(&contact_angle_deg)) {
-                    return Err(invalid(
-                        "cohesion.contact_angle_deg",
-                        contact_angle_deg,
-                        "must lie in [0, 90) degrees: a bridge with θ ≥ 90° does not attract",
-                    ));
-                }
-                ("cohesion.volume", volume)
-            }
-            Cohesion::Linear {
-                max_force,
-                stiffness,
-            } => {
-                positive("cohesion.max_force", max_force)?;
-                positive("cohesion.stiffness", stiffness)?;
-                ("cohesion.stiffness", stiffness)
-            }
+            Cohesion::Willett { volume, .. } => ("cohesion.volume", volume),
+            Cohesion::Linear { stiffness, .. } => ("cohesion.stiffness", stiffness),
         };
+        // The values against the bounds the law declares in the registry.
+        self.law_spec()
+            .build()
+            .map_err(|e| law_error("cohesion", e))?;
         let range = self.law().range();
         if !(range.is_finite() && range <= d) {
             return Err(invalid(

@@ -253,6 +253,16 @@ pub struct Line {
 /// points do not determine it (too few, or no spread in `x`).
 pub fn fit_line(points: &[(f64, f64, f64)], through_origin: bool) -> Option<Line> {
     let k = if through_origin { 1 } else { 2 };
+    if through_origin && points.len() == 1 {
+        // One point fixes a line through the origin: slope y/x, its error σ/x.
+        let (x, y, sigma) = points[0];
+        return (x != 0.0).then(|| Line {
+            slope: (y / x, sigma / x.abs()),
+            intercept: (0.0, 0.0),
+            points: 1,
+            max_residual: 0.0,
+        });
+    }
     if points.len() <= k {
         return None;
     }
@@ -910,6 +920,28 @@ mod tests {
         );
         assert!(md.contains(&fixed), "{md}");
         assert!(md.contains("`--mu` 0.15"), "{md}");
+    }
+
+    /// With the 0 nl run as the intercept, one more volume determines the slope `a`: the
+    /// difference of the two `c*` over `S_c*`, with their combined error.
+    #[test]
+    fn two_volumes_with_the_zero_volume_run_give_the_slope() {
+        let mut runs = Vec::new();
+        for (k, nl) in [0.0, 75.0].into_iter().enumerate() {
+            let mut r = run(&format!("v{k}"), nl, 0.02, 0.0, 6e5);
+            r.cohesion = if nl == 0.0 {
+                (0.07, 0.01)
+            } else {
+                (0.07 + 1.2 * r.rupture, 0.02)
+            };
+            r.torque_factor = r.torque.0 / (r.cohesion.0 + 0.15 * r.pressure);
+            runs.push(r);
+        }
+        let md = wet_study(&runs, Some(0.15)).expect("study").markdown;
+        let error = 0.01f64.hypot(0.02) / runs[1].rupture;
+        let row = format!("| 0.02 | 0.5, 9.81 | 2 | 0.070 ± 0.010 | 1.200 ± {error:.3} | 0.000 |");
+        assert!(md.contains(&row), "{row}\n{md}");
+        assert!(!md.contains("too few volumes"), "{md}");
     }
 
     /// Wet runs pair with the dry run sheared from the same settled state in the same cell;
