@@ -1,21 +1,22 @@
-//! The `rheodem` command-line program: run a scenario, resume a run, benchmark the engine.
+//! The `rheodem` command-line program: the subcommands and the helpers they share (worker
+//! threads, memory limits). Each subcommand lives in a file of its own: `scenario_run.rs`
+//! (`run`, `resume`, `check`), `bench.rs`, `shear.rs`, `split_bottom.rs`, `study.rs`,
+//! `cg.rs`, `predict.rs`, `contact.rs`.
 
+mod bench;
 mod cg;
 mod contact;
 mod law_arg;
 mod predict;
 mod progress;
+mod scenario_run;
 mod shear;
 mod split_bottom;
 mod study;
 
 use anyhow::{Context, Result, bail};
 use clap::{Parser, Subcommand};
-use rheodem::contact::LawKind;
-use rheodem::io::made_by::{self, Maker};
-use rheodem::run::Run;
-use rheodem::scenario::Scenario;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::process::ExitCode;
 
 /// Discrete-element simulator and rheology toolkit for cohesive granular materials.
@@ -30,40 +31,9 @@ struct Cli {
 enum Command {
     /// Run a scenario file into a run directory (without a file: the built-in default,
     /// examples/dense-packing.toml).
-    Run {
-        /// The scenario (TOML); omitted: the built-in default.
-        scenario: Option<PathBuf>,
-        /// Run directory (default: `runs/<scenario name>`).
-        #[arg(long, short)]
-        out: Option<PathBuf>,
-        /// Worker threads (default: all cores).
-        #[arg(long, short)]
-        threads: Option<usize>,
-        /// Override the scenario's seed.
-        #[arg(long)]
-        seed: Option<u64>,
-        /// Start over even if the directory already holds a run.
-        #[arg(long)]
-        force: bool,
-        /// No progress bar; only the final line.
-        #[arg(long, short)]
-        quiet: bool,
-        /// Refuse a scenario whose estimated memory exceeds this size (e.g. 8GiB, 500MB;
-        /// default: the machine's physical memory).
-        #[arg(long, value_name = "SIZE")]
-        max_memory: Option<String>,
-    },
+    Run(scenario_run::RunArgs),
     /// Continue a run from its last checkpoint.
-    Resume {
-        /// The run directory.
-        dir: PathBuf,
-        /// Worker threads (default: the count the run started with, for bit-identical results).
-        #[arg(long, short)]
-        threads: Option<usize>,
-        /// No progress bar.
-        #[arg(long, short)]
-        quiet: bool,
-    },
+    Resume(scenario_run::ResumeArgs),
     /// Stress-controlled simple shear box at given (μ_p, I, p*, Bo): steady-state φ, μ, Z, σ.
     ShearBox(shear::ShearBoxArgs),
     /// Split-bottom ring shear cell: fill, settle, shear; wall torque and the shear band.
@@ -133,49 +103,14 @@ enum Command {
     Contact(contact::ContactCommand),
     /// Check a scenario and print its resolved values, without running it (not even its
     /// preparation: the preparation's outcome is only known from `run`).
-    Check {
-        /// The scenario (TOML).
-        scenario: PathBuf,
-        /// Worker threads the run would use, for the memory estimate (default: all cores).
-        #[arg(long, short)]
-        threads: Option<usize>,
-        /// Refuse a scenario whose estimated memory exceeds this size (e.g. 8GiB, 500MB;
-        /// default: the machine's physical memory).
-        #[arg(long, value_name = "SIZE")]
-        max_memory: Option<String>,
-    },
+    Check(scenario_run::CheckArgs),
     /// Throughput on the standard problem (crates/rheodem/data/bench-packing.txt, see
     /// BENCHMARKS.md), in particle-steps per second.
-    Bench {
-        /// Thread counts to measure (default: 1 and all cores).
-        #[arg(long, short, value_delimiter = ',')]
-        threads: Vec<usize>,
-        /// Untimed warm-up steps.
-        #[arg(long, default_value_t = 2000)]
-        warmup: u64,
-        /// Timed steps.
-        #[arg(long, default_value_t = 3000)]
-        steps: u64,
-        /// Verlet skin (model units; the LAMMPS input uses 0.2).
-        #[arg(long, default_value_t = rheodem::bench::DEFAULT_SKIN)]
-        skin: f64,
-        /// Also hold σ_yy at 185 (the LAMMPS steady pressure) by rescaling L_y.
-        #[arg(long)]
-        stress_control: bool,
-        // The help text lists the registered laws.
-        #[arg(long, value_delimiter = ',', value_parser = law_arg::law_kind,
-              help = law_arg::law_help("Adhesive laws to measure at the bench strength \
-                  (f_a^max = 185 for the mean pair, rupture at 0.225 d; default: none, \
-                  reversible, liquid_bridge)"))]
-        cohesion: Vec<LawKind>,
-    },
+    Bench(bench::BenchArgs),
 }
 
-/// The scenario `rheodem run` uses when given none.
-const DEFAULT_SCENARIO: &str = include_str!("../../../examples/dense-packing.toml");
-
 fn main() -> ExitCode {
-    match run(Cli::parse()) {
+    match dispatch(Cli::parse()) {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
             eprintln!("error: {}", error_chain(&e));
@@ -281,143 +216,12 @@ pub(crate) fn pool(threads: Option<usize>) -> Result<(rayon::ThreadPool, usize)>
     Ok((pool, n))
 }
 
-fn run(cli: Cli) -> Result<()> {
+fn dispatch(cli: Cli) -> Result<()> {
     match cli.command {
         Command::SplitBottom(args) => split_bottom::run(args),
         Command::Cg(args) => cg::run(args),
-        Command::Run {
-            scenario,
-            out,
-            threads,
-            seed,
-            force,
-            quiet,
-            max_memory,
-        } => {
-            let limit = memory_limit(max_memory.as_deref())?;
-            let (mut sc, name, base) = match &scenario {
-                Some(path) => (
-                    Scenario::from_file(path)?,
-                    path.file_stem()
-                        .map_or("run".into(), |s| s.to_string_lossy().into_owned()),
-                    path.parent().unwrap_or(Path::new(".")).to_path_buf(),
-                ),
-                None => (
-                    Scenario::from_toml(DEFAULT_SCENARIO)?,
-                    "default".to_string(),
-                    PathBuf::from("."),
-                ),
-            };
-            if let Some(s) = seed {
-                sc.seed = s;
-            }
-            let dir = out.unwrap_or_else(|| Path::new("runs").join(&name));
-            if !force {
-                made_by::expect(&dir, Maker::Run).map_err(|e| anyhow::anyhow!("{e}"))?;
-            }
-            let shown = scenario
-                .as_ref()
-                .map_or("the built-in default scenario".to_string(), |p| {
-                    p.display().to_string()
-                });
-            let (pool, n) = pool(threads)?;
-            let (particles, bytes) =
-                rheodem::scenario::size::memory_estimate(&sc, &base, n, limit)?;
-            if !quiet {
-                eprintln!(
-                    "preparing {shown} ({particles} particles, about {} of memory) …",
-                    rheodem::memory::Bytes(bytes)
-                );
-            }
-            let mut r = pool.install(|| Run::start(sc, &base, &dir, n, force))?;
-            for w in &r.resolved.warnings {
-                eprintln!("warning: {w}");
-            }
-            if !quiet {
-                eprintln!(
-                    "{} free + {} wall particles, dt = {:.4e} s (t_c/{:.1}), {} steps, {} threads → {}",
-                    r.resolved.free_particles,
-                    r.resolved.wall_particles,
-                    r.resolved.dt,
-                    r.resolved.contact_time / r.resolved.dt,
-                    r.plan.steps,
-                    n,
-                    dir.display()
-                );
-            }
-            advance(&pool, &mut r, &dir, quiet)
-        }
-        Command::Resume {
-            dir,
-            threads,
-            quiet,
-        } => {
-            match made_by::read(&dir) {
-                Some(Maker::Run) | None if dir.join("checkpoint.bin").exists() => {}
-                Some(Maker::Run) => bail!(
-                    "{} holds a `rheodem run` that stopped before its first checkpoint (during \
-                     its preparation, say): start it again with `rheodem run SCENARIO --out {} \
-                     --force`",
-                    dir.display(),
-                    dir.display()
-                ),
-                Some(other) => bail!(
-                    "{} holds a `rheodem {}` run, which `resume` does not continue: {}",
-                    dir.display(),
-                    other.name(),
-                    other.how_to_continue(&dir)
-                ),
-                None => bail!(
-                    "{} holds no rheodem run (no checkpoint.bin){}",
-                    dir.display(),
-                    if dir.exists() {
-                        ""
-                    } else {
-                        ": no such directory"
-                    }
-                ),
-            }
-            let mut r = Run::resume(&dir)?;
-            if threads.is_none() && r.threads > MAX_THREADS_PER_CPU * cpus() {
-                bail!(
-                    "{} started with {} threads, more than this machine allows ({} × {} CPUs): \
-                     pass --threads N (the result then differs in the last bits from an \
-                     uninterrupted run)",
-                    dir.display(),
-                    r.threads,
-                    MAX_THREADS_PER_CPU,
-                    cpus()
-                );
-            }
-            let (pool, n) = pool(threads.or(Some(r.threads)))?;
-            if n != r.threads && !quiet {
-                eprintln!(
-                    "note: the run started with {} threads; with {n} it will not be bit-identical",
-                    r.threads
-                );
-            }
-            r.threads = n;
-            if r.is_complete() {
-                // Rewrites the outputs of the final checkpoint (a kill may have come
-                // between the checkpoint and the summary).
-                r.advance(&dir, |_, _| {})?;
-                println!(
-                    "{} is already complete ({} steps)",
-                    dir.display(),
-                    r.plan.steps
-                );
-                return Ok(());
-            }
-            if !quiet {
-                eprintln!(
-                    "resuming {} at step {} of {}",
-                    dir.display(),
-                    r.simulation.step,
-                    r.plan.steps
-                );
-            }
-            advance(&pool, &mut r, &dir, quiet)
-        }
+        Command::Run(args) => scenario_run::run(args),
+        Command::Resume(args) => scenario_run::resume(args),
         Command::Contact(cmd) => contact::run(cmd),
         Command::Predict(args) => predict::run(&args),
         Command::Fit { dir } => shear::fit(&dir),
@@ -434,123 +238,7 @@ fn run(cli: Cli) -> Result<()> {
         Command::Db(cmd) => shear::db(cmd),
         Command::Study(cmd) => study::study(cmd),
         Command::Compare { dir, figures } => shear::compare(&dir, figures.as_deref()),
-        Command::Check {
-            scenario,
-            threads,
-            max_memory,
-        } => {
-            let limit = memory_limit(max_memory.as_deref())?;
-            let threads = worker_count("--threads", threads.unwrap_or_else(cpus))?;
-            let sc = Scenario::from_file(&scenario)?;
-            let base = scenario.parent().unwrap_or(Path::new("."));
-            let (particles, bytes) =
-                rheodem::scenario::size::memory_estimate(&sc, base, threads, limit)?;
-            eprintln!(
-                "note: {particles} particles, an estimated {} of memory on {threads} threads{}",
-                rheodem::memory::Bytes(bytes),
-                limit.map_or(String::new(), |l| format!(
-                    " (limit {})",
-                    rheodem::memory::Bytes(l)
-                ))
-            );
-            let checked = rheodem::scenario::check(&sc, base)?;
-            for w in &checked.resolved.warnings {
-                eprintln!("warning: {w}");
-            }
-            if let Some(p) = &checked.preparation {
-                eprintln!("note: not run by `check`: the preparation ({p})");
-            }
-            println!("{}", serde_json::to_string_pretty(&checked.resolved)?);
-            Ok(())
-        }
-        Command::Bench {
-            threads,
-            warmup,
-            steps,
-            skin,
-            stress_control,
-            cohesion,
-        } => {
-            if !(skin.is_finite() && skin > 0.0) {
-                bail!("--skin = {skin}: must be a positive number");
-            }
-            let all = std::thread::available_parallelism().map_or(1, |n| n.get());
-            let counts = if threads.is_empty() {
-                if all > 1 { vec![1, all] } else { vec![1] }
-            } else {
-                threads
-            };
-            let variants = if cohesion.is_empty() {
-                vec![LawKind::None, LawKind::Reversible, LawKind::LiquidBridge]
-            } else {
-                cohesion
-            };
-            println!("standard problem: {}", rheodem::bench::DESCRIPTION);
-            for cohesion in variants {
-                let name = match cohesion {
-                    LawKind::None => "frictional",
-                    law => law.name(),
-                };
-                for &n in &counts {
-                    let (pool, n) = pool(Some(n))?;
-                    let r = pool.install(|| {
-                        let mut sim = rheodem::bench::standard_problem(1.0, cohesion, skin);
-                        if stress_control {
-                            rheodem::bench::add_stress_control(&mut sim, 185.0);
-                        }
-                        rheodem::bench::run_timed(&mut sim, warmup, steps)
-                    });
-                    let total = r.loop_time.as_secs_f64();
-                    let pct = |d: std::time::Duration| 100.0 * d.as_secs_f64() / total;
-                    println!(
-                        "{name}, threads {n}: {} particles × {} steps in {:.3} s — neighbours {:.1} % (rebuilds {:.1} %: {}, {:.1} pairs/particle), forces {:.1} %, integration {:.1} %; P = {:.1}, Z = {:.2}",
-                        r.particles,
-                        r.steps,
-                        total,
-                        pct(r.neighbor_time),
-                        pct(r.rebuild_time),
-                        r.rebuilds,
-                        r.pairs_per_particle,
-                        pct(r.force_time),
-                        pct(r.integrate_time),
-                        r.pressure,
-                        r.coordination
-                    );
-                    println!(
-                        "throughput: {:.0} particle-steps/s ({:.2} M, {name}, threads {n})",
-                        r.particle_steps_per_second(),
-                        r.particle_steps_per_second() / 1e6
-                    );
-                }
-            }
-            Ok(())
-        }
+        Command::Check(args) => scenario_run::check(args),
+        Command::Bench(args) => bench::run(args),
     }
-}
-
-fn advance(pool: &rayon::ThreadPool, r: &mut Run, dir: &Path, quiet: bool) -> Result<()> {
-    let report = progress::Progress::new(quiet, r.simulation.particles.len());
-    pool.install(|| {
-        r.advance(dir, |done, total| {
-            if done.is_multiple_of(64) || done == total {
-                report.update("run", done, total);
-            }
-        })
-    })?;
-    report.finish();
-    let last = r.rows.last();
-    println!(
-        "done: {} steps, t = {:.6e} s, {:.1} s wall{}; outputs in {}",
-        r.simulation.step,
-        r.simulation.time,
-        r.wall_seconds,
-        last.map_or(String::new(), |o| format!(
-            ", φ = {:.4}, Z = {:.3}, P = {:.4e} Pa",
-            o.volume_fraction,
-            o.coordination,
-            o.mean_stress()
-        )),
-        dir.display()
-    );
-    Ok(())
 }
