@@ -27,6 +27,9 @@
 #            the two linear laws equivalent to 75 nl at 0.020 N/m (equal range and equal
 #            energy, `rheodem contact equivalent`: f_a^max = 1.2989e-4 N, k_c = 0.2622 and
 #            0.3879 N/m); and the dry cell over the same window
+#   long   — the papers' window: dry and Willett 0.020 N/m, 75 nl at Ω = 0.0628 rad/s for
+#            200 s, averaged over 80–200 s (5.03–12.57 rad), from the settled state (about
+#            14 h of one thread per run; resumable from its 40 checkpoints)
 #   grains — the wet-excess candidate "radius distribution": the papers' public driver draws
 #            radii uniformly in [1, 2] × 1.1 mm/√2, i.e. w = 2 about a mean diameter of
 #            2.333 mm (rheodem's default: 2.2 mm). A settled state of those grains
@@ -163,6 +166,13 @@ for group in "$@"; do
         --adhesive-stiffness 0.2622
       wet linear-energy-v75-omega0.06283 --law linear --max-force 1.2989e-4 \
         --adhesive-stiffness 0.3879 ;;
+    long)
+      settle
+      from=$(echo "80 * $OMEGA_PAPER" | bc -l)
+      to=$(echo "200 * $OMEGA_PAPER" | bc -l)
+      run "$(binary $COMMIT)" dry-omega0.06283-200s $OMEGA_PAPER "$from" "$to"
+      run "$(binary $COMMIT)" wet-g0.02-v75-omega0.06283-200s $OMEGA_PAPER "$from" "$to" \
+        --law willett --surface-tension 0.02 --volume-nl 75 ;;
     grains)
       variant_settle grains "$(binary $COMMIT)" 'diameter = 2.3333333333333333e-3'
       variant_runs grains "$(binary $COMMIT)" ;;
@@ -176,6 +186,6 @@ for group in "$@"; do
         echo "== shell: the settling DIFFERS from $V/settled"; exit 1
       fi
       variant_runs shell "$(binary $SHELL_COMMIT)" ;;
-    *) echo "unknown group $group (settle, rate, bits, wet05, seeds, wet0063, grains, shell)" >&2; exit 2 ;;
+    *) echo "unknown group $group (settle, rate, bits, wet05, seeds, wet0063, long, grains, shell)" >&2; exit 2 ;;
   esac
 done
