@@ -1051,3 +1051,111 @@ fn neighbour_list_is_complete_under_pure_compression() {
          was rebuilt at {listed_at:?}: overlap up to {worst_missed:.3e} m unseen"
     );
 }
+
+/// Under peculiar contacts the pair loop subtracts the boundary's mean-flow difference
+/// `L b` from a contact's relative velocity (docs/model.md §4.4). Two touching spheres that
+/// both move with the mean flow, stacked along the gradient `y`, then have no relative
+/// sliding velocity: their sliding spring stays at zero after one evaluation and the
+/// force is the normal spring alone. In the lab frame the same pair slides at `γ̇ d` along
+/// `x`, and its spring loads to `γ̇ d dt`. The gradient itself is checked against the mean
+/// flow: `L b = v̄(r + b) − v̄(r)`.
+#[test]
+fn peculiar_contacts_subtract_the_boundarys_mean_flow() {
+    use rheodem::contact::{ContactTable, Damping, NormalLaw};
+    use rheodem::forces::{ForceScratch, pair_forces};
+    use rheodem::neighbor::NeighborList;
+    use rheodem::particles::{Motion, Particles};
+    use rheodem::team::Team;
+    let (rate, a, overlap, dt) = (3.0, 1.0e-3, 1.0e-5, 1.0e-6);
+    let edge = 12.0 * a;
+    let mut domain =
+        Domain::new(DVec3::ZERO, DVec3::splat(edge), [true; 3]).with_lees_edwards(rate);
+    assert_eq!(domain.contact_velocity_gradient(), None, "the lab frame");
+    domain.lees_edwards.as_mut().expect("sheared").dynamics = ShearDynamics::PeculiarContacts;
+    let gradient = domain
+        .contact_velocity_gradient()
+        .expect("peculiar contacts subtract the mean flow");
+    for (r, b) in [
+        (
+            DVec3::new(1e-3, 2e-3, 3e-3),
+            DVec3::new(0.4e-3, 1.3e-3, -0.2e-3),
+        ),
+        (
+            DVec3::new(5e-3, 7e-3, 1e-3),
+            DVec3::new(-1e-3, -2.5e-3, 0.7e-3),
+        ),
+    ] {
+        let expected = domain.mean_flow(r + b) - domain.mean_flow(r);
+        assert!((gradient * b - expected).length() < 1e-15, "{b}");
+    }
+    let law = ContactLaw {
+        normal: NormalLaw {
+            stiffness: 100.0,
+            damping: Damping::NONE,
+        },
+        tangential: Resistance {
+            stiffness: 40.0,
+            damping: Damping::NONE,
+            mu_static: 10.0,
+            mu_dynamic: 10.0,
+        },
+        rolling: Resistance::NONE,
+        torsion: Resistance::NONE,
+        adhesion: rheodem::contact::Adhesion::None,
+    };
+    let sliding_spring = |mean_flow| {
+        let mut p = Particles::default();
+        let d = 2.0 * a - overlap;
+        for y in [4.0 * a, 4.0 * a + d] {
+            let r = DVec3::new(6.0 * a, y, 6.0 * a);
+            p.push(
+                Sphere {
+                    position: r,
+                    velocity: domain.mean_flow(r),
+                    angular_velocity: DVec3::ZERO,
+                    radius: a,
+                    species: 0,
+                    motion: Motion::Free,
+                },
+                2500.0,
+            );
+        }
+        let team = Team::new(1);
+        let mut list = NeighborList::new(0.2 * a, 0.0);
+        list.build(&mut p, &domain, &team, 0.0).expect("list");
+        pair_forces::<()>(
+            &mut p,
+            &mut list,
+            &ContactTable::uniform(1, law),
+            &domain.image_transforms(),
+            mean_flow,
+            dt,
+            &mut ForceScratch::default(),
+            &team,
+        );
+        // The upper sphere (larger y) is pushed up by k_n δ and dragged back along x by the
+        // sliding spring k_t ξ (ξ = the sliding displacement over one step).
+        let upper = if p.position[0].y > p.position[1].y {
+            0
+        } else {
+            1
+        };
+        (p.force[upper], 100.0 * overlap)
+    };
+    // The lab frame's spring force, and the rounding left of it when the mean flow's
+    // difference is subtracted (`γ̇ y₁ − γ̇ y₂` against `γ̇ (y₁ − y₂)`: a few ulps).
+    let slid = rate * (2.0 * a - overlap) * dt;
+    let (f, normal) = sliding_spring(Some(gradient));
+    assert!((f.y - normal).abs() < 1e-12 * normal, "{f}");
+    assert!(
+        f.x.abs() < 1e-9 * 40.0 * slid,
+        "no sliding relative to the mean flow: {f}"
+    );
+    let (f, normal) = sliding_spring(None);
+    assert!((f.y - normal).abs() < 1e-12 * normal, "{f}");
+    assert!(
+        (f.x + 40.0 * slid).abs() < 1e-9 * 40.0 * slid,
+        "the lab frame slides at γ̇ d: {f} against {}",
+        -40.0 * slid
+    );
+}
