@@ -185,7 +185,7 @@ pub fn resume(args: ResumeArgs) -> Result<()> {
     if r.is_complete() {
         // Rewrites the outputs of the final checkpoint (a kill may have come
         // between the checkpoint and the summary).
-        r.advance(&dir, |_, _| {})?;
+        r.advance(&dir, |_| {})?;
         println!(
             "{} is already complete ({} steps)",
             dir.display(),
@@ -239,9 +239,9 @@ pub fn check(args: CheckArgs) -> Result<()> {
 fn advance(pool: &rayon::ThreadPool, r: &mut Run, dir: &Path, quiet: bool) -> Result<()> {
     let report = progress::Progress::new(quiet, r.simulation.particles.len());
     pool.install(|| {
-        r.advance(dir, |done, total| {
-            if done.is_multiple_of(64) || done == total {
-                report.update("run", done, total);
+        r.advance(dir, |p| {
+            if p.done.is_multiple_of(64) || p.done == p.total {
+                report.update(p.stage, p.done, p.total);
             }
         })
     })?;

@@ -286,13 +286,9 @@ pub fn run(args: SplitBottomArgs) -> Result<()> {
         );
     }
     let report = Progress::new(args.quiet, run.simulation.particles.len());
-    let mut progress = |stage: Stage, done: u64, total: u64| {
-        if done.is_multiple_of(64) || done == total {
-            let name = match stage {
-                Stage::Settle => "settle",
-                _ => "shear",
-            };
-            report.update(name, done, total);
+    let mut progress = |p: rheodem::driver::Progress| {
+        if p.done.is_multiple_of(64) || p.done == p.total {
+            report.update(p.stage, p.done, p.total);
         }
     };
     // Stage by stage (a finished run only rewrites its outputs), with a warning when

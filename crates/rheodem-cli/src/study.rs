@@ -430,11 +430,11 @@ fn run_cell(
     archive: Option<&Path>,
 ) -> Result<(), RunError> {
     let mut last = (None, 0);
-    let summary = split_bottom_study::run_point(spec, dir, &mut |stage, done, total| {
-        let pct = done * 100 / total.max(1);
-        if last.0 != Some(stage) || pct >= last.1 + 10 {
-            last = (Some(stage), pct);
-            eprintln!("  {name}: {stage:?} {pct} %");
+    let summary = split_bottom_study::run_point(spec, dir, &mut |p| {
+        let pct = p.done * 100 / p.total.max(1);
+        if last.0 != Some(p.stage) || pct >= last.1 + 10 {
+            last = (Some(p.stage), pct);
+            eprintln!("  {name}: {} {pct} %", p.stage);
         }
     })?;
     if let Some(a) = archive {

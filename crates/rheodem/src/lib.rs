@@ -56,6 +56,7 @@ pub mod analysis;
 pub mod band;
 pub mod bench;
 pub mod cg;
+pub mod driver;
 pub mod fit;
 pub mod io;
 pub mod plot;

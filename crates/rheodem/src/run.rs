@@ -15,93 +15,24 @@
 //! Every file is written atomically (see [`crate::io::atomic`]).
 
 use crate::Simulation;
-use crate::cg::{self, ContactRecords, periodic::BoxFields};
+use crate::cg::{self, ContactRecord, periodic::BoxFields};
 use crate::io::atomic::write_atomic;
-use crate::io::lock::{DirLock, LockError};
-use crate::io::made_by::{self, Maker};
+use crate::io::made_by::Maker;
 use crate::io::{timeseries, vtk};
 use crate::measure::Observables;
-use crate::neighbor::NeighborError;
 use crate::sanity::Instability;
-use crate::scenario::{Resolved, Scenario, ScenarioError, build};
+use crate::scenario::{Resolved, Scenario, build};
 use serde::{Deserialize, Serialize};
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::sync::Arc;
-use std::time::Instant;
+
+use crate::driver::{Driver, Every, Session, SetUp, StepNeeds};
+pub use crate::driver::{
+    Progress, RunError, Status, io_err, lock, read_checkpoint, write_checkpoint,
+};
+use crate::io::lock::DirLock;
 
 pub mod samples;
-
-/// Errors of a run.
-#[derive(Debug, thiserror::Error)]
-pub enum RunError {
-    /// The scenario is invalid.
-    #[error(transparent)]
-    Scenario(#[from] ScenarioError),
-    /// A coarse-graining setting or a snapshot file is unusable.
-    #[error(transparent)]
-    Fields(#[from] crate::cg::CgError),
-    /// A file could not be written or read.
-    #[error("cannot {operation} {}: {source}", path.display())]
-    Io {
-        /// What was attempted ("write", "read", "create the directory", …).
-        operation: &'static str,
-        /// The file.
-        path: PathBuf,
-        /// The cause (the operating system's reason).
-        source: std::io::Error,
-    },
-    /// The checkpoint is unreadable, damaged or from another version.
-    #[error("{}: not a usable checkpoint: {reason}", path.display())]
-    Checkpoint {
-        /// The file.
-        path: PathBuf,
-        /// Why.
-        reason: String,
-    },
-    /// The run directory already holds a run.
-    #[error(
-        "{} already holds a run: resume it with `rheodem resume {}`, or pass --force to start over",
-        .0.display(), .0.display()
-    )]
-    Exists(PathBuf),
-    /// Another process is running in the run directory.
-    #[error(
-        "{} is being run by another process (it holds {}/.lock); wait for it to finish",
-        .0.display(), .0.display()
-    )]
-    Busy(PathBuf),
-    /// The run directory holds a run of another scenario than the one asked for.
-    #[error(
-        "{} holds a run of different parameters than this point (changed since it started?): \
-         remove the directory to start the point over",
-        .0.display()
-    )]
-    Mismatch(PathBuf),
-    /// The state stopped being a meaningful DEM state.
-    #[error(
-        "the simulation became unstable at step {step} (t = {time:e} s): {cause}. {}. Usual \
-         causes: a time step too large for the stiffest contact (`run.dt`), overlapping or \
-         coincident initial positions, or velocities or a prescribed motion far beyond what \
-         the contacts can resolve",
-        match checkpoint {
-            Some(k) => format!("The last checkpoint (step {k}) predates it and is kept"),
-            None => "No checkpoint was written before it".to_string(),
-        }
-    )]
-    Unstable {
-        /// Step at which the state was found unstable.
-        step: u64,
-        /// Simulated time of that step (s).
-        time: f64,
-        /// What is wrong, with the particles concerned.
-        cause: Instability,
-        /// Step of the last checkpoint on disk, if any.
-        checkpoint: Option<u64>,
-    },
-    /// The neighbour search failed (box too small).
-    #[error(transparent)]
-    Neighbor(#[from] NeighborError),
-}
 
 /// Output cadence in steps.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
@@ -116,31 +47,9 @@ pub struct OutputPlan {
     pub checkpoint_every: u64,
 }
 
-impl OutputPlan {
-    fn every(steps: u64, count: u64) -> u64 {
-        steps.checked_div(count).map_or(0, |e| e.max(1))
-    }
-
-    fn due(every: u64, step: u64) -> bool {
-        every != 0 && step.is_multiple_of(every)
-    }
-}
-
-/// Progress of a run as the summary reports it.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum Status {
-    /// Still running (or killed; resume it).
-    Running,
-    /// Reached its last step.
-    Completed,
-    /// Stopped on an error (see the summary's `error`); resuming repeats it.
-    Failed,
-}
-
-/// Everything a run needs; serialised whole as its checkpoint.
+/// A scenario's run (`rheodem run`, a shear-box point): everything its checkpoint holds.
 #[derive(Clone, Debug, Serialize, Deserialize)]
-pub struct Run {
+pub struct ScenarioState {
     /// The scenario as run (kept as TOML text in the checkpoint).
     #[serde(with = "scenario_text")]
     pub scenario: Scenario,
@@ -162,22 +71,17 @@ pub struct Run {
     /// written before they existed.
     #[serde(default)]
     pub fields: Option<BoxFields>,
-    /// Step of the last checkpoint written or read by this process.
-    #[serde(skip)]
-    checkpointed: Option<u64>,
-    /// The lock on the run directory, held while this run is alive.
-    #[serde(skip)]
-    lock: Option<Arc<DirLock>>,
 }
 
-/// The JSON summary.
+/// A scenario's run in its directory, on the staged run driver.
+pub type Run = Driver<ScenarioState>;
+
+/// The JSON summary of a scenario's run (the driver adds the status, version, commit,
+/// last checkpoint and error).
 #[derive(Serialize)]
 struct Summary<'a> {
     program: &'static str,
-    version: &'static str,
-    commit: &'static str,
     seed: u64,
-    status: Status,
     steps_done: u64,
     steps_total: u64,
     time: f64,
@@ -187,137 +91,17 @@ struct Summary<'a> {
     neighbor_builds: u64,
     resolved: &'a Resolved,
     last: Option<&'a Observables>,
-    last_checkpoint_step: Option<u64>,
-    error: Option<String>,
 }
 
-/// Header of checkpoint files (format 3): these 8 bytes, the CRC-32 of the body (4 bytes,
-/// little endian), then the body: MessagePack with named fields, so a checkpoint stays
-/// readable when later versions add fields (with defaults) to the state.
-const CHECKPOINT_MAGIC: &[u8; 8] = b"RHEODEM3";
-/// Headers of earlier checkpoint formats, recognised to say so.
-const OLD_MAGICS: [&[u8; 8]; 1] = [b"RHEODEM2"];
-
-/// An I/O error naming `operation` and `path`.
-pub fn io_err<'a>(
-    operation: &'static str,
-    path: &'a Path,
-) -> impl FnOnce(std::io::Error) -> RunError + 'a {
-    move |source| RunError::Io {
-        operation,
-        path: path.to_path_buf(),
-        source,
-    }
-}
-
-/// Takes the lock of the run directory `dir` (creating it if needed), without waiting:
-/// [`RunError::Busy`] if another process holds it.
-pub fn lock(dir: &Path) -> Result<Arc<DirLock>, RunError> {
-    std::fs::create_dir_all(dir).map_err(io_err("create the directory", dir))?;
-    match DirLock::try_acquire(dir) {
-        Ok(l) => {
-            // With the lock held, no other writer is left: a temporary here was left by a
-            // killed one.
-            crate::io::atomic::remove_stale_temporaries(dir)
-                .map_err(io_err("remove stale temporaries in", dir))?;
-            Ok(Arc::new(l))
-        }
-        Err(LockError::Busy(d)) => Err(RunError::Busy(d)),
-        Err(LockError::Io { path, source }) => Err(RunError::Io {
-            operation: "lock",
-            path,
-            source,
-        }),
-    }
-}
-
-/// The checkpoint file's bytes for `body`.
-fn checkpoint_bytes(body: &[u8]) -> Vec<u8> {
-    let mut bytes = Vec::with_capacity(body.len() + 12);
-    bytes.extend_from_slice(CHECKPOINT_MAGIC);
-    bytes.extend_from_slice(&crc32fast::hash(body).to_le_bytes());
-    bytes.extend_from_slice(body);
-    bytes
-}
-
-/// Writes `state` atomically as a checkpoint file (header, CRC-32, MessagePack of the
-/// program version and the state).
-pub fn write_checkpoint<T: Serialize>(path: &Path, state: &T) -> Result<(), RunError> {
-    let body =
-        rmp_serde::to_vec_named(&(crate::VERSION, state)).map_err(|e| RunError::Checkpoint {
-            path: path.to_path_buf(),
-            reason: e.to_string(),
-        })?;
-    write_atomic(path, &checkpoint_bytes(&body)).map_err(io_err("write", path))
-}
-
-/// Reads a checkpoint file written by [`write_checkpoint`] in this checkpoint format (the
-/// header) by this program version or an earlier one: the state's fields are named, and
-/// fields added since take their defaults (docs/compatibility.md). A checkpoint of a newer
-/// version is refused before its state is read, since fields this version does not know
-/// would be dropped.
-pub fn read_checkpoint<T: serde::de::DeserializeOwned>(path: &Path) -> Result<T, RunError> {
-    let bytes = std::fs::read(path).map_err(io_err("read", path))?;
-    let bad = |reason: String| RunError::Checkpoint {
-        path: path.to_path_buf(),
-        reason,
-    };
-    let body = checkpoint_body(&bytes).map_err(bad)?;
-    let (version, _): (String, serde::de::IgnoredAny) =
-        rmp_serde::from_slice(body).map_err(|e| bad(e.to_string()))?;
-    if !readable_version(&version) {
-        return Err(bad(format!(
-            "written by rheodem {version}, newer than this rheodem {}: resume it with that \
-             version or a later one",
-            crate::VERSION
-        )));
-    }
-    let (_, state): (String, T) = rmp_serde::from_slice(body).map_err(|e| bad(e.to_string()))?;
-    Ok(state)
-}
-
-/// Whether a checkpoint body written by program `version` (`major.minor.patch`) may be
-/// read here: not newer than [`crate::VERSION`].
-fn readable_version(version: &str) -> bool {
-    let parse = |v: &str| -> Option<Vec<u64>> {
-        let core = v.split(['-', '+']).next()?;
-        let parts: Option<Vec<u64>> = core.split('.').map(|x| x.parse().ok()).collect();
-        parts.filter(|p| p.len() == 3)
-    };
-    matches!((parse(version), parse(crate::VERSION)), (Some(a), Some(b)) if a <= b)
-}
-
-/// The verified body of a checkpoint file, or why it is unusable.
-fn checkpoint_body(bytes: &[u8]) -> Result<&[u8], String> {
-    if let Some(rest) = bytes.strip_prefix(CHECKPOINT_MAGIC.as_slice()) {
-        let (sum, body) = rest
-            .split_first_chunk::<4>()
-            .ok_or("truncated after its header")?;
-        let (stored, actual) = (u32::from_le_bytes(*sum), crc32fast::hash(body));
-        if stored != actual {
-            return Err(format!(
-                "checksum mismatch (stored {stored:08x}, computed {actual:08x}): the file is \
-                 damaged; start the run over, or restore the file from a backup"
-            ));
-        }
-        return Ok(body);
-    }
-    if OLD_MAGICS.iter().any(|m| bytes.starts_with(m.as_slice())) {
-        return Err(format!(
-            "written in an earlier checkpoint format ({}); this rheodem reads format {} \
-             only: start the run over",
-            String::from_utf8_lossy(&bytes[..8]),
-            String::from_utf8_lossy(CHECKPOINT_MAGIC)
-        ));
-    }
-    Err("missing rheodem checkpoint header".into())
-}
-
-impl Run {
+impl Driver<ScenarioState> {
     /// Builds the scenario (relative paths from `base_dir`) and creates the run directory
     /// `dir`, refusing one that already holds a run unless `force` (which also removes the
     /// old run's snapshots). The directory stays locked against other processes while the
     /// returned run lives.
+    ///
+    /// # Errors
+    /// [`RunError`] for an invalid scenario, a directory that holds a run or is busy, or
+    /// a file not written.
     pub fn start(
         scenario: Scenario,
         base_dir: &Path,
@@ -332,6 +116,9 @@ impl Run {
 
     /// [`Run::start`] in a directory whose `lock` the caller holds; `existed` says whether
     /// the directory was there before (a failed start removes a directory it created).
+    ///
+    /// # Errors
+    /// As [`Run::start`].
     pub fn start_locked(
         lock: Arc<DirLock>,
         existed: bool,
@@ -341,23 +128,23 @@ impl Run {
         threads: usize,
         force: bool,
     ) -> Result<Run, RunError> {
-        if dir.join("checkpoint.bin").exists() && !force {
-            return Err(RunError::Exists(dir.to_path_buf()));
-        }
-        // Marked before the preparation, so that a directory killed during it says what it
-        // is.
-        let marker = dir.join(made_by::FILE);
-        made_by::mark(dir, Maker::Run).map_err(io_err("write", &marker))?;
-        let built = match build(&scenario, base_dir) {
-            Ok(b) => b,
-            Err(e) => {
-                if !existed {
-                    drop(lock);
-                    let _ = std::fs::remove_dir_all(dir);
-                }
-                return Err(e.into());
-            }
-        };
+        Driver::create_locked(lock, existed, dir, force, |session| {
+            ScenarioState::prepare(scenario, base_dir, threads, session)
+        })
+    }
+}
+
+impl ScenarioState {
+    /// The built scenario in the run directory: its input files written, the old run's
+    /// snapshots and samples removed, the first time-series row recorded.
+    fn prepare(
+        scenario: Scenario,
+        base_dir: &Path,
+        threads: usize,
+        session: &mut Session<'_>,
+    ) -> Result<ScenarioState, RunError> {
+        let dir = session.dir;
+        let built = build(&scenario, base_dir)?;
         let snapshots = dir.join("snapshots");
         remove_snapshots(&snapshots)?;
         samples::remove_all(dir)?;
@@ -365,13 +152,13 @@ impl Run {
         let steps = built.resolved.steps;
         let plan = OutputPlan {
             steps,
-            timeseries_every: OutputPlan::every(steps, scenario.output.timeseries_rows),
-            snapshot_every: OutputPlan::every(steps, scenario.output.snapshots),
-            checkpoint_every: OutputPlan::every(steps, scenario.output.checkpoints),
+            timeseries_every: Every::spread(steps, scenario.output.timeseries_rows).0,
+            snapshot_every: Every::spread(steps, scenario.output.snapshots).0,
+            checkpoint_every: Every::spread(steps, scenario.output.checkpoints).0,
         };
         // Checked by `build`.
         let fields = scenario.fields.as_ref().map(BoxFields::new).transpose()?;
-        let mut run = Run {
+        let mut state = ScenarioState {
             scenario,
             resolved: built.resolved,
             plan,
@@ -381,164 +168,33 @@ impl Run {
             snapshots: Vec::new(),
             wall_seconds: 0.0,
             fields,
-            checkpointed: None,
-            lock: Some(lock),
         };
         let header = format!(
             "# rheodem {} (commit {}) — scenario as run, every default written out; seed {}\n",
             crate::VERSION,
             crate::COMMIT,
-            run.scenario.seed
+            state.scenario.seed
         );
         let path = dir.join("scenario.toml");
-        write_atomic(&path, (header + &run.scenario.to_toml()).as_bytes())
+        write_atomic(&path, (header + &state.scenario.to_toml()).as_bytes())
             .map_err(io_err("write", &path))?;
         let path = dir.join("resolved.json");
-        let json = serde_json::to_string_pretty(&run.resolved).unwrap_or_default();
+        let json = serde_json::to_string_pretty(&state.resolved).unwrap_or_default();
         write_atomic(&path, json.as_bytes()).map_err(io_err("write", &path))?;
-        run.guard(dir, |run| run.record(dir))?;
-        run.checkpoint(dir, Status::Running)?;
-        Ok(run)
-    }
-
-    /// Loads the checkpoint of the run directory `dir`, after taking the directory's lock
-    /// (so that a checkpoint is never read while another process advances it).
-    pub fn resume(dir: &Path) -> Result<Run, RunError> {
-        let path = dir.join("checkpoint.bin");
-        if !path.exists() {
-            return Err(RunError::Checkpoint {
-                path,
-                reason: "no such file: this directory holds no rheodem run".into(),
-            });
-        }
-        Run::resume_locked(lock(dir)?, dir)
-    }
-
-    /// [`Run::resume`] of a directory whose `lock` the caller holds.
-    pub fn resume_locked(lock: Arc<DirLock>, dir: &Path) -> Result<Run, RunError> {
-        let mut state: Run = read_checkpoint(&dir.join("checkpoint.bin"))?;
-        state.checkpointed = Some(state.simulation.step);
-        state.lock = Some(lock);
+        state.record(session)?;
         Ok(state)
     }
 
-    /// Whether every step has been taken.
-    pub fn is_complete(&self) -> bool {
-        self.simulation.step >= self.plan.steps
-    }
-
-    /// Steps until the end, reporting progress `(done, total)` after every step and writing
-    /// outputs and checkpoints on their cadence; ends with a final checkpoint and summary.
-    pub fn advance(
-        &mut self,
-        dir: &Path,
-        mut progress: impl FnMut(u64, u64),
-    ) -> Result<(), RunError> {
-        self.advance_until(dir, self.plan.steps, &mut progress)
-    }
-
-    /// Like [`Run::advance`] but stops after step `stop` (used to test resumption). A run
-    /// already complete only rewrites its outputs (repairing a summary that a kill left
-    /// saying "running"). On an error the summary says "failed" and why.
-    pub fn advance_until(
-        &mut self,
-        dir: &Path,
-        stop: u64,
-        progress: &mut dyn FnMut(u64, u64),
-    ) -> Result<(), RunError> {
-        if self.is_complete() {
-            return self.write_outputs(dir, Status::Completed, None);
-        }
-        let stop = stop.min(self.plan.steps);
-        self.guard(dir, |run| run.steps_until(dir, stop, progress))
-    }
-
-    /// Runs `f`; if it fails, records the failure in the summary before passing it on.
-    fn guard(
-        &mut self,
-        dir: &Path,
-        f: impl FnOnce(&mut Run) -> Result<(), RunError>,
-    ) -> Result<(), RunError> {
-        let outcome = f(self);
-        if let Err(e) = &outcome {
-            // The error itself matters more than a summary that cannot be written.
-            let _ = self.write_summary(dir, Status::Failed, Some(e.to_string()));
-        }
-        outcome
-    }
-
-    fn steps_until(
-        &mut self,
-        dir: &Path,
-        stop: u64,
-        progress: &mut dyn FnMut(u64, u64),
-    ) -> Result<(), RunError> {
-        let mut clock = Instant::now();
-        while self.simulation.step < stop {
-            let next = self.simulation.step + 1;
-            let row = OutputPlan::due(self.plan.timeseries_every, next) || next == self.plan.steps;
-            let end = self.simulation.time + self.simulation.dt;
-            if row && self.fields.as_ref().is_some_and(|f| f.wants(end)) {
-                let contacts = self.simulation.step_with::<ContactRecords>()?;
-                let fields = self.fields.as_mut().expect("checked");
-                let view = cg::periodic::LabView::of(&self.simulation);
-                if fields.spec.records {
-                    samples::write(dir, &view, &contacts.0)?;
-                }
-                fields.add(&view, &contacts.0)?;
-            } else {
-                self.simulation.step(row)?;
-            }
-            if row {
-                self.record(dir)?;
-            } else if OutputPlan::due(self.plan.snapshot_every, next) {
-                self.snapshot(dir)?;
-            }
-            if OutputPlan::due(self.plan.checkpoint_every, next) || next == self.plan.steps {
-                self.wall_seconds += clock.elapsed().as_secs_f64();
-                clock = Instant::now();
-                let status = if next == self.plan.steps {
-                    Status::Completed
-                } else {
-                    Status::Running
-                };
-                // Never checkpoint a state that is not sane.
-                self.sane()?;
-                self.checkpoint(dir, status)?;
-            }
-            progress(next, self.plan.steps);
-        }
-        self.wall_seconds += clock.elapsed().as_secs_f64();
-        Ok(())
-    }
-
-    /// The current state's sanity as a run error.
-    fn sane(&self) -> Result<(), RunError> {
-        self.simulation
-            .check_sanity()
-            .map_err(|cause| RunError::Unstable {
-                step: self.simulation.step,
-                time: self.simulation.time,
-                cause,
-                checkpoint: self.checkpointed,
-            })
-    }
-
     /// Appends a time-series row for the current (measured) state, and a snapshot if due.
-    fn record(&mut self, dir: &Path) -> Result<(), RunError> {
-        self.sane()?;
+    fn record(&mut self, session: &Session<'_>) -> Result<(), RunError> {
+        session.sane(&self.simulation)?;
         let row = self.simulation.observables();
         if !row.is_finite() {
-            return Err(RunError::Unstable {
-                step: row.step,
-                time: row.time,
-                cause: Instability::NonFiniteMeasurement,
-                checkpoint: self.checkpointed,
-            });
+            return Err(session.unstable(&self.simulation, Instability::NonFiniteMeasurement));
         }
         self.rows.push(row);
-        if OutputPlan::due(self.plan.snapshot_every, self.simulation.step) {
-            self.snapshot(dir)?;
+        if Every(self.plan.snapshot_every).fires(self.simulation.step) {
+            self.snapshot(session.dir)?;
         }
         Ok(())
     }
@@ -555,20 +211,70 @@ impl Run {
         Ok(())
     }
 
-    /// Writes the checkpoint, then the time series, snapshot collection and summary.
-    fn checkpoint(&mut self, dir: &Path, status: Status) -> Result<(), RunError> {
-        write_checkpoint(&dir.join("checkpoint.bin"), &*self)?;
-        self.checkpointed = Some(self.simulation.step);
-        self.write_outputs(dir, status, None)
+    /// Whether the step after the current one writes a time-series row.
+    fn row_due(&self, step: u64) -> bool {
+        Every(self.plan.timeseries_every).fires(step) || step == self.plan.steps
+    }
+}
+
+impl SetUp for ScenarioState {
+    const MAKER: Maker = Maker::Run;
+
+    fn simulation(&self) -> &Simulation {
+        &self.simulation
     }
 
-    /// Writes the time series, snapshot collection and summary of the state in memory.
-    fn write_outputs(
-        &self,
-        dir: &Path,
-        status: Status,
-        error: Option<String>,
-    ) -> Result<(), RunError> {
+    fn simulation_mut(&mut self) -> &mut Simulation {
+        &mut self.simulation
+    }
+
+    fn is_complete(&self) -> bool {
+        self.simulation.step >= self.plan.steps
+    }
+
+    fn progress(&self) -> Progress {
+        Progress {
+            stage: "run",
+            done: self.simulation.step,
+            total: self.plan.steps,
+        }
+    }
+
+    fn needs(&self) -> StepNeeds {
+        let row = self.row_due(self.simulation.step + 1);
+        let end = self.simulation.time + self.simulation.dt;
+        StepNeeds {
+            measure: row,
+            contacts: row && self.fields.as_ref().is_some_and(|f| f.wants(end)),
+        }
+    }
+
+    fn after_step(
+        &mut self,
+        session: &mut Session<'_>,
+        contacts: Option<&[ContactRecord]>,
+    ) -> Result<bool, RunError> {
+        let step = self.simulation.step;
+        if let (Some(contacts), Some(fields)) = (contacts, self.fields.as_mut()) {
+            let view = cg::periodic::LabView::of(&self.simulation);
+            if fields.spec.records {
+                samples::write(session.dir, &view, contacts)?;
+            }
+            fields.add(&view, contacts)?;
+        }
+        if self.row_due(step) {
+            self.record(session)?;
+        } else if Every(self.plan.snapshot_every).fires(step) {
+            self.snapshot(session.dir)?;
+        }
+        Ok(Every(self.plan.checkpoint_every).fires(step) || step == self.plan.steps)
+    }
+
+    fn wall_seconds_mut(&mut self) -> &mut f64 {
+        &mut self.wall_seconds
+    }
+
+    fn write_outputs(&self, dir: &Path) -> Result<serde_json::Value, RunError> {
         let path = dir.join("timeseries.csv");
         write_atomic(&path, timeseries::to_csv(&self.rows).as_bytes())
             .map_err(io_err("write", &path))?;
@@ -578,22 +284,14 @@ impl Run {
         if let Some(fields) = &self.fields {
             write_fields(fields, dir)?;
         }
-        self.write_summary(dir, status, error)
+        Ok(self.summary())
     }
 
-    fn write_summary(
-        &self,
-        dir: &Path,
-        status: Status,
-        error: Option<String>,
-    ) -> Result<(), RunError> {
+    fn summary(&self) -> serde_json::Value {
         let done = self.simulation.step;
         let summary = Summary {
             program: "rheodem",
-            version: crate::VERSION,
-            commit: crate::COMMIT,
             seed: self.scenario.seed,
-            status,
             steps_done: done,
             steps_total: self.plan.steps,
             time: self.simulation.time,
@@ -607,12 +305,8 @@ impl Run {
             neighbor_builds: self.simulation.neighbors.builds,
             resolved: &self.resolved,
             last: self.rows.last(),
-            last_checkpoint_step: self.checkpointed,
-            error,
         };
-        let path = dir.join("summary.json");
-        let json = serde_json::to_string_pretty(&summary).unwrap_or_default();
-        write_atomic(&path, json.as_bytes()).map_err(io_err("write", &path))
+        serde_json::to_value(&summary).unwrap_or_default()
     }
 }
 

@@ -33,14 +33,14 @@ fn run(scenario: Scenario, dir: &Path, stop: Option<u64>) -> Run {
     let mut run = Run::start(scenario, Path::new("."), dir, 1, true).expect("start");
     match stop {
         Some(s) => {
-            run.advance_until(dir, s, &mut |_, _| {}).expect("advance");
+            run.advance_until(dir, s, &mut |_| {}).expect("advance");
             drop(run);
             let mut run = Run::resume(dir).expect("resume");
-            run.advance(dir, |_, _| {}).expect("advance");
+            run.advance(dir, |_| {}).expect("advance");
             run
         }
         None => {
-            run.advance(dir, |_, _| {}).expect("advance");
+            run.advance(dir, |_| {}).expect("advance");
             run
         }
     }

@@ -103,7 +103,7 @@ fn every_example_runs_a_few_steps() {
         let base = path.parent().expect("examples/");
         let mut run =
             Run::start(scenario, base, &dir, 1, true).unwrap_or_else(|e| panic!("{name}: {e}"));
-        run.advance(&dir, |_, _| {})
+        run.advance(&dir, |_| {})
             .unwrap_or_else(|e| panic!("{name}: {e}"));
         let sim = &run.simulation;
         assert!(run.is_complete(), "{name}");

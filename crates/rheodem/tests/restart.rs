@@ -71,14 +71,14 @@ fn start(dir: &Path) -> Run {
 fn resumed_run_is_bit_identical() {
     let whole_dir = temp_dir("whole");
     let mut whole = start(&whole_dir);
-    whole.advance(&whole_dir, |_, _| {}).expect("run");
+    whole.advance(&whole_dir, |_| {}).expect("run");
     assert!(whole.is_complete());
 
     let split_dir = temp_dir("split");
     let mut first = start(&split_dir);
     // Stop at step 1700; the last checkpoint on disk is at step 1500.
     first
-        .advance_until(&split_dir, 1700, &mut |_, _| {})
+        .advance_until(&split_dir, 1700, &mut |_| {})
         .expect("run");
     drop(first);
     let mut resumed = Run::resume(&split_dir).expect("checkpoint readable");
@@ -86,7 +86,7 @@ fn resumed_run_is_bit_identical() {
     // The checkpoint holds open bridges (pairs apart that still attract).
     let open = resumed.rows.last().map_or(0.0, |o| o.bridges_per_particle);
     assert!(open > 0.0, "the test needs open bridges at the checkpoint");
-    resumed.advance(&split_dir, |_, _| {}).expect("run");
+    resumed.advance(&split_dir, |_| {}).expect("run");
 
     let (a, csv_a) = fingerprint(&whole);
     let (b, csv_b) = fingerprint(&resumed);
@@ -102,7 +102,7 @@ fn resumed_run_is_bit_identical() {
     // Same seed, fresh run: identical again.
     let again_dir = temp_dir("again");
     let mut again = start(&again_dir);
-    again.advance(&again_dir, |_, _| {}).expect("run");
+    again.advance(&again_dir, |_| {}).expect("run");
     assert!(fingerprint(&again).0 == a);
 
     for d in [whole_dir, split_dir, again_dir] {
@@ -134,12 +134,12 @@ fn corrupt_checkpoint_is_an_error_not_a_panic() {
 fn a_run_that_blows_up_stops_with_an_error_and_keeps_its_checkpoint() {
     let dir = temp_dir("diverged");
     let mut run = start(&dir);
-    run.advance_until(&dir, 200, &mut |_, _| {})
+    run.advance_until(&dir, 200, &mut |_| {})
         .expect("healthy start");
     // A non-finite velocity stands for any blow-up (a time step far too large, say).
     run.simulation.particles.velocity[0] = glam::DVec3::new(f64::NAN, 0.0, 0.0);
     let err = run
-        .advance_until(&dir, run.plan.steps, &mut |_, _| {})
+        .advance_until(&dir, run.plan.steps, &mut |_| {})
         .expect_err("must stop");
     assert!(
         matches!(

@@ -92,7 +92,7 @@ steps = 10
 fn d1_summary_of_a_run_killed_after_its_last_checkpoint_is_repaired() {
     let dir = temp_dir("d1");
     let mut run = start(GAS, &dir);
-    run.advance(&dir, |_, _| {}).expect("run");
+    run.advance(&dir, |_| {}).expect("run");
     drop(run);
     // What the kill left: the final checkpoint, and the summary of the one before.
     let mut stale = summary(&dir);
@@ -102,7 +102,7 @@ fn d1_summary_of_a_run_killed_after_its_last_checkpoint_is_repaired() {
 
     let mut resumed = Run::resume(&dir).expect("resumes");
     assert!(resumed.is_complete());
-    resumed.advance(&dir, |_, _| {}).expect("repair");
+    resumed.advance(&dir, |_| {}).expect("repair");
     let repaired = summary(&dir);
     assert_eq!(repaired["status"], "completed");
     assert_eq!(repaired["steps_done"], 400);
@@ -116,12 +116,11 @@ fn d1_summary_of_a_run_killed_after_its_last_checkpoint_is_repaired() {
 fn d1_summary_of_a_run_that_blew_up_says_failed_and_why() {
     let dir = temp_dir("d1-failed");
     let mut run = start(GAS, &dir);
-    run.advance_until(&dir, 150, &mut |_, _| {})
-        .expect("healthy");
+    run.advance_until(&dir, 150, &mut |_| {}).expect("healthy");
     run.simulation.particles.velocity[7] = DVec3::new(f64::NAN, 0.0, 0.0);
     let id = run.simulation.particles.id[7];
     let err = run
-        .advance_until(&dir, 400, &mut |_, _| {})
+        .advance_until(&dir, 400, &mut |_| {})
         .expect_err("stops");
     assert!(
         err.to_string().contains("last checkpoint (step 100)"),
@@ -161,7 +160,7 @@ fn d2_a_wall_across_a_periodic_axis_is_refused() {
 fn d4_a_checkpoint_with_a_flipped_bit_is_refused() {
     let dir = temp_dir("d4");
     let mut run = start(GAS, &dir);
-    run.advance_until(&dir, 100, &mut |_, _| {}).expect("run");
+    run.advance_until(&dir, 100, &mut |_| {}).expect("run");
     drop(run);
     let path = dir.join("checkpoint.bin");
     let good = std::fs::read(&path).expect("checkpoint");
@@ -188,12 +187,11 @@ fn d5_a_particle_far_too_fast_stops_the_run_naming_it() {
     let dir = temp_dir("d5");
     let text = GAS.replace("[run]\n", "[run]\ndt_fraction = 0.1\n");
     let mut run = start(&text, &dir);
-    run.advance_until(&dir, 50, &mut |_, _| {})
-        .expect("healthy");
+    run.advance_until(&dir, 50, &mut |_| {}).expect("healthy");
     run.simulation.particles.velocity[3] = DVec3::new(1000.0, 0.0, 0.0);
     let id = run.simulation.particles.id[3];
     let err = run
-        .advance_until(&dir, 400, &mut |_, _| {})
+        .advance_until(&dir, 400, &mut |_| {})
         .expect_err("stops");
     match &err {
         RunError::Unstable {
@@ -233,7 +231,7 @@ fn d5_a_moderate_overlap_runs() {
     let sc = Scenario::from_toml(&pair(1.6e-3, 0.0)).expect("parses");
     let dir = temp_dir("d5-moderate");
     let mut run = Run::start(sc, Path::new("."), &dir, 1, true).expect("starts");
-    run.advance(&dir, |_, _| {})
+    run.advance(&dir, |_| {})
         .expect("an overlap of 0.4 radii runs");
     let _ = std::fs::remove_dir_all(dir);
 }
@@ -301,11 +299,11 @@ fn d6_io_errors_name_operation_path_and_reason() {
 fn d7_starting_over_removes_the_old_snapshots() {
     let dir = temp_dir("d7");
     let mut run = start(GAS, &dir);
-    run.advance(&dir, |_, _| {}).expect("run");
+    run.advance(&dir, |_| {}).expect("run");
     drop(run);
     let shorter = GAS.replace("steps = 400", "steps = 200");
     let mut again = start(&shorter, &dir);
-    again.advance(&dir, |_, _| {}).expect("run");
+    again.advance(&dir, |_| {}).expect("run");
     let mut files: Vec<String> = std::fs::read_dir(dir.join("snapshots"))
         .expect("snapshots")
         .map(|e| e.expect("entry").file_name().to_string_lossy().into_owned())

@@ -45,7 +45,7 @@ fn positions(run: &SplitBottomRun) -> Vec<[f64; 3]> {
 fn small_cell_runs_end_to_end() {
     let dir = tmp("e2e");
     let mut run = SplitBottomRun::start(small(), &dir, false).expect("start");
-    run.advance(&dir, |_, _, _| {}).expect("advance");
+    run.advance(&dir, |_| {}).expect("advance");
     assert_eq!(run.stage, Stage::Done);
     let settled = run.settled.clone().expect("settled");
     assert!(settled.criterion_met, "{settled:?}");
@@ -113,26 +113,25 @@ fn runs_from_one_settled_state_and_resume_are_identical() {
     spec.duration = 0.02;
     spec.average_from = 0.01;
     let mut settle = SplitBottomRun::start(spec.clone(), &source, false).expect("start");
-    settle.advance(&source, |_, _, _| {}).expect("advance");
+    settle.advance(&source, |_| {}).expect("advance");
     drop(settle);
 
     let (a, b) = (tmp("from-a"), tmp("from-b"));
     let mut ra = SplitBottomRun::from_settled(spec.clone(), &source, &a, false).expect("a");
     let mut rb = SplitBottomRun::from_settled(spec.clone(), &source, &b, false).expect("b");
     assert_eq!(positions(&ra), positions(&rb));
-    ra.advance(&a, |_, _, _| {}).expect("advance a");
+    ra.advance(&a, |_| {}).expect("advance a");
     // b: stop part-way (after its second checkpoint), drop, resume, finish.
     let start = rb.simulation.step;
     let stop = start + rb.shear_steps() / 2 + 3;
-    rb.advance_until(&b, stop, &mut |_, _, _| {})
-        .expect("first part");
+    rb.advance_until(&b, stop, &mut |_| {}).expect("first part");
     drop(rb);
     let mut rb = SplitBottomRun::resume(&b).expect("resume");
     assert!(
         rb.simulation.step < stop,
         "resumed from the last checkpoint"
     );
-    rb.advance(&b, |_, _, _| {}).expect("rest");
+    rb.advance(&b, |_| {}).expect("rest");
     assert_eq!(ra.simulation.step, rb.simulation.step);
     assert_eq!(positions(&ra), positions(&rb));
     assert_eq!(ra.rows.len(), rb.rows.len());
@@ -304,7 +303,7 @@ fn small_wet_cell_fields_on_the_fly_equal_offline() {
     let mut run = SplitBottomRun::start(spec, &dir, false).expect("start");
     // Sample the fields exactly at the snapshots: every quarter of the shear stage.
     run.spec.cg_every = run.simulation.dt * (run.shear_steps() / 4) as f64;
-    run.advance(&dir, |_, _, _| {}).expect("advance");
+    run.advance(&dir, |_| {}).expect("advance");
     let live = run.fields.clone().expect("fields");
     // Snapshots at 0.02, 0.04, 0.06, 0.08 s of shear; the window starts at 0.03 s.
     assert_eq!(live.snapshots, 3);
@@ -413,7 +412,7 @@ fn r1_wet_cells_finish_settling() {
     };
     spec.settle_max_time = 1.0;
     let mut run = SplitBottomRun::start(spec.clone(), &dir, false).expect("start");
-    run.advance_stage(&dir, &mut |_, _, _| {}).expect("settle");
+    run.advance_stage(&dir, &mut |_| {}).expect("settle");
     assert_eq!(run.stage, Stage::Shear);
     let settled = run.settled.clone().expect("settled");
     assert!(settled.criterion_met, "{settled:?}");
@@ -441,7 +440,7 @@ fn r1_wet_cells_finish_settling() {
 fn dry_spring_energy_is_the_elastic_energy() {
     let dir = tmp("dry-springs");
     let mut run = SplitBottomRun::start(small(), &dir, false).expect("start");
-    run.advance_stage(&dir, &mut |_, _, _| {}).expect("settle");
+    run.advance_stage(&dir, &mut |_| {}).expect("settle");
     let c = run.simulation.contact_summary();
     assert!(c.elastic_energy > 0.0);
     assert_eq!(c.spring_energy.to_bits(), c.elastic_energy.to_bits());
@@ -460,7 +459,7 @@ fn a_thicker_wall_shell_freezes_the_same_packing_deeper() {
             ..small()
         };
         let mut run = SplitBottomRun::start(spec, &dir, false).expect("start");
-        run.advance_stage(&dir, &mut |_, _, _| {}).expect("settle");
+        run.advance_stage(&dir, &mut |_| {}).expect("settle");
         std::fs::remove_dir_all(&dir).ok();
         run
     };

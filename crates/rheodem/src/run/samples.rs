@@ -6,7 +6,7 @@
 //! run again, with the run's settings or others: the same samples with the same settings
 //! give the fields of the run to the bit.
 
-use super::{Run, RunError, io_err, read_checkpoint};
+use super::{RunError, ScenarioState, io_err, read_checkpoint};
 use crate::cg::periodic::{BoxFields, LabView};
 use crate::cg::snapshot::{contacts_csv, particles_csv, read_contacts_csv, read_particles_csv};
 use crate::cg::{CgError, ContactRecord};
@@ -134,7 +134,7 @@ fn read(dir: &Path, step: u64) -> Result<(LabView, Vec<ContactRecord>), RunError
 ///
 /// # Errors
 /// [`RunError`] when the checkpoint cannot be read.
-pub fn read_run(dir: &Path) -> Result<Run, RunError> {
+pub fn read_run(dir: &Path) -> Result<ScenarioState, RunError> {
     read_checkpoint(&dir.join("checkpoint.bin"))
 }
 
@@ -142,7 +142,7 @@ pub fn read_run(dir: &Path) -> Result<Run, RunError> {
 /// to its last checkpoint, in step order, read one at a time.
 fn window<'a>(
     dir: &'a Path,
-    run: &'a Run,
+    run: &'a ScenarioState,
     start: f64,
 ) -> Result<impl Iterator<Item = Result<(LabView, Vec<ContactRecord>), RunError>> + 'a, RunError> {
     let steps = list(dir)?;
@@ -170,7 +170,11 @@ fn no_samples(dir: &Path, start: f64) -> RunError {
 /// # Errors
 /// [`RunError`] when a sample cannot be read, there is none to use, or `spec` is out of
 /// range.
-pub fn offline_fields(dir: &Path, run: &Run, spec: &FieldsSpec) -> Result<BoxFields, RunError> {
+pub fn offline_fields(
+    dir: &Path,
+    run: &ScenarioState,
+    spec: &FieldsSpec,
+) -> Result<BoxFields, RunError> {
     let mut fields = BoxFields::new(spec)?;
     for sample in window(dir, run, spec.start)? {
         let (view, contacts) = sample?;
@@ -189,7 +193,12 @@ pub fn offline_fields(dir: &Path, run: &Run, spec: &FieldsSpec) -> Result<BoxFie
 /// # Errors
 /// [`RunError`] when a sample cannot be read or exported, there is none, or a file cannot
 /// be written.
-pub fn export_mercury(dir: &Path, run: &Run, start: f64, out: &Path) -> Result<usize, RunError> {
+pub fn export_mercury(
+    dir: &Path,
+    run: &ScenarioState,
+    start: f64,
+    out: &Path,
+) -> Result<usize, RunError> {
     let (mut data, mut fstat, mut count) = (String::new(), String::new(), 0);
     for sample in window(dir, run, start)? {
         let (view, contacts) = sample?;

@@ -11,7 +11,8 @@ pub mod results_db;
 pub mod shear_box;
 pub mod slurm;
 pub mod split_bottom;
-pub mod split_bottom_fields;
+/// The split-bottom cell's fields, under their former path.
+pub use split_bottom::fields as split_bottom_fields;
 pub mod split_bottom_study;
 pub mod study;
 pub mod sweep;

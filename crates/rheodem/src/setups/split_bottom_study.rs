@@ -17,6 +17,7 @@
 
 use super::split_bottom::{Cohesion, SplitBottomRun, SplitBottomSpec, Stage};
 use super::sweep::{PointStatus, point_tables};
+use crate::driver::Progress;
 use crate::io::atomic::write_atomic;
 use crate::run::{RunError, io_err};
 use crate::scenario::ScenarioError;
@@ -142,7 +143,7 @@ pub fn archive_point(archive: &Path, name: &str, summary: &Path) -> Result<(), R
 pub fn run_point(
     spec: &SplitBottomSpec,
     dir: &Path,
-    progress: &mut dyn FnMut(Stage, u64, u64),
+    progress: &mut dyn FnMut(Progress),
 ) -> Result<PathBuf, RunError> {
     if let PointStatus::Finished(summary) = point_status(dir, spec) {
         return Ok(summary);
@@ -156,7 +157,7 @@ pub fn run_point(
     } else {
         SplitBottomRun::start(spec.clone(), dir, false)?
     };
-    run.advance(dir, progress)?;
+    run.advance_until(dir, u64::MAX, progress)?;
     Ok(dir.join("summary.json"))
 }
 

@@ -257,7 +257,8 @@ pub fn run_point(
         Run::start_locked(lock, existed, scenario, Path::new("."), dir, threads, true)?
     };
     made_by::mark(dir, Maker::ShearBox).map_err(io_err("write", &dir.join(made_by::FILE)))?;
-    run.advance_until(dir, run.plan.steps, progress)?;
+    let steps = run.plan.steps;
+    run.advance_until(dir, steps, &mut |p| progress(p.done, p.total))?;
     let result = PointResult {
         name: name.to_string(),
         spec: spec.clone(),

@@ -3,7 +3,8 @@
 //! averaging window, and the same fields from the run's stored snapshots afterwards
 //! ([`offline_fields`]).
 
-use super::split_bottom::{SplitBottomRun, SplitBottomSpec};
+use super::spec::SplitBottomSpec;
+use super::state::SplitBottomState;
 use crate::cg::shear_band::{
     BandAtHeight, LinearFit, RheologyPoint, band_by_height, band_points, fit_friction_line,
 };
@@ -53,7 +54,7 @@ impl FieldSettings {
     ///
     /// # Errors
     /// [`CgError::Invalid`] for a spacing that is not positive or a grid too large.
-    pub fn grid(&self, run: &SplitBottomRun) -> Result<Grid, CgError> {
+    pub fn grid(&self, run: &SplitBottomState) -> Result<Grid, CgError> {
         let d = run.spec.diameter;
         if !(self.spacing.is_finite() && self.spacing > 0.0) {
             return Err(CgError::Invalid(format!(
@@ -89,7 +90,7 @@ pub fn material(spec: &SplitBottomSpec) -> Material {
 }
 
 /// The snapshot of the run's current state, with the contacts of its last step.
-pub fn snapshot(run: &SplitBottomRun, contacts: &[ContactRecord]) -> Snapshot {
+pub fn snapshot(run: &SplitBottomState, contacts: &[ContactRecord]) -> Snapshot {
     let p = &run.simulation.particles;
     Snapshot::assemble(
         run.simulation.time,
@@ -111,7 +112,7 @@ pub fn record_paths(dir: &Path, vtp: &str) -> (PathBuf, PathBuf) {
 /// Writes the particle and contact records of the run's current state next to the snapshot
 /// `vtp` (a path relative to `dir`).
 pub fn write_records(
-    run: &SplitBottomRun,
+    run: &SplitBottomState,
     contacts: &[ContactRecord],
     dir: &Path,
     vtp: &str,
@@ -128,7 +129,7 @@ pub fn write_records(
 /// # Errors
 /// [`RunError`] when a file cannot be written.
 pub fn write_outputs(
-    run: &SplitBottomRun,
+    run: &SplitBottomState,
     sums: &CgSums,
     dir: &Path,
 ) -> Result<BandRheology, RunError> {
@@ -156,7 +157,7 @@ pub fn write_outputs(
 ///
 /// # Errors
 /// [`RunError`] when the checkpoint cannot be read.
-pub fn read_run(dir: &Path) -> Result<SplitBottomRun, RunError> {
+pub fn read_run(dir: &Path) -> Result<SplitBottomState, RunError> {
     read_checkpoint(&dir.join("checkpoint.bin"))
 }
 
@@ -168,7 +169,7 @@ pub fn read_run(dir: &Path) -> Result<SplitBottomRun, RunError> {
 /// range.
 pub fn offline_fields(
     dir: &Path,
-    run: &SplitBottomRun,
+    run: &SplitBottomState,
     settings: FieldSettings,
 ) -> Result<CgSums, RunError> {
     let kernel = settings.kernel(run.spec.diameter)?;
@@ -204,7 +205,7 @@ type Records = (f64, Vec<ParticleRecord>, Vec<ContactRecord>);
 /// The records of the run's stored snapshots in the averaging window, read one at a time.
 fn window_records<'a>(
     dir: &'a Path,
-    run: &'a SplitBottomRun,
+    run: &'a SplitBottomState,
 ) -> impl Iterator<Item = Result<Records, RunError>> + 'a {
     let t0 = run.shear_start.map_or(f64::INFINITY, |s| s.0);
     run.snapshots
@@ -224,7 +225,7 @@ fn window_records<'a>(
 ///
 /// # Errors
 /// [`RunError`] when a snapshot cannot be read or exported, or a file cannot be written.
-pub fn export_mercury(dir: &Path, run: &SplitBottomRun, out: &Path) -> Result<usize, RunError> {
+pub fn export_mercury(dir: &Path, run: &SplitBottomState, out: &Path) -> Result<usize, RunError> {
     let (mut data, mut fstat, mut count) = (String::new(), String::new(), 0);
     for snapshot in window_records(dir, run) {
         let (time, particles, contacts) = snapshot?;
@@ -414,12 +415,12 @@ fn compare_laws(mu_p: f64, points: &[RheologyPoint], p_min: f64) -> Option<LawCo
 }
 
 /// The band and its rheology from `sums`' fields (Roy et al. 2016, Sects. 3.1–3.2).
-pub fn band_rheology(run: &SplitBottomRun, sums: &CgSums) -> BandRheology {
+pub fn band_rheology(run: &SplitBottomState, sums: &CgSums) -> BandRheology {
     band_of_fields(run, &sums.grid, &fields(sums, Some(&material(&run.spec))))
 }
 
 /// The band and its rheology from the fields `points` on `grid`.
-fn band_of_fields(run: &SplitBottomRun, grid: &Grid, points: &[FieldPoint]) -> BandRheology {
+fn band_of_fields(run: &SplitBottomState, grid: &Grid, points: &[FieldPoint]) -> BandRheology {
     let spec = &run.spec;
     let heights = band_by_height(grid, points, spec.omega, 0.8);
     let band = band_points(grid, points, &heights);
