@@ -379,7 +379,7 @@ impl NeighborList {
 
         let a_max = particles.radius.iter().copied().fold(0.0, f64::max);
         let cutoff = 2.0 * a_max + self.range + self.skin;
-        if let Some(w) = &domain.wedge {
+        if let Some(w) = domain.as_wedge() {
             let reach = 2.0 * a_max + self.range;
             if 2.0 * w.inner_radius * (0.5 * w.angle).sin() < reach {
                 return Err(NeighborError::WedgeTooNarrow {
@@ -527,7 +527,7 @@ impl NeighborList {
             .collect();
         let this = &*self;
         let turn = |slot: u32| turns[particles.id[slot as usize] as usize];
-        let into_frame = |h: ContactHistory, slot: u32| match domain.wedge {
+        let into_frame = |h: ContactHistory, slot: u32| match domain.as_wedge() {
             Some(w) if turn(slot) != 0 => h.rotated(&ImageTransform {
                 rotation: Some(w.rotation(-turn(slot))),
                 ..ImageTransform::IDENTITY
@@ -584,7 +584,7 @@ impl NeighborList {
         let cutoff = grid.cutoff;
         let rotated = domain.rotated_images();
         let images = domain.image_transforms();
-        let wedge = domain.wedge;
+        let wedge = domain.as_wedge();
         // The row of `i` in `row[..len]` (returned); `row` is a buffer that only grows, so
         // that its entries are not cleared for each particle.
         let row_of = |i: usize, row: &mut Vec<(u32, u8)>, stencil: &mut Stencil| -> usize {
@@ -933,7 +933,7 @@ impl CellGrid {
             lengths,
             dims,
             periodic: domain.periodic,
-            shear_shift: domain.lees_edwards.map_or(0.0, |le| le.shift),
+            shear_shift: domain.as_lees_edwards().map_or(0.0, |le| le.shift),
             cutoff,
         })
     }

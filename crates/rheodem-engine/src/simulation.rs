@@ -48,15 +48,20 @@ pub struct Simulation {
     pub step: u64,
     /// Control of `σ_yy` through `L_y`, if any (Lees-Edwards shear box).
     pub stress_control: Option<StressControl>,
-    /// `σ_yy` (Pa) of the last force evaluation under stress control.
+    /// `σ_yy` (Pa) of the last force evaluation under stress control: the controller's
+    /// input for the next step, hence state (checkpointed), not an observation.
     pub sigma_yy: f64,
     /// Limits of a sane state (see [`crate::sanity`]).
     #[serde(default)]
     pub limits: Limits,
-    /// Contact sums of the last measuring force evaluation and its step.
+    /// Contact sums of the last measuring force evaluation and its step: an observation,
+    /// not state, so not checkpointed (a resumed run measures again at its next measuring
+    /// step; checkpoints that hold it still load, the field ignored).
+    #[serde(skip)]
     measured: (u64, ContactSums),
-    /// Loads on the wall parts at the last measuring force evaluation.
-    #[serde(default)]
+    /// Loads on the wall parts at the last measuring force evaluation (an observation,
+    /// not checkpointed).
+    #[serde(skip)]
     part_loads: PartLoads,
     #[serde(skip)]
     scratch: ForceScratch,

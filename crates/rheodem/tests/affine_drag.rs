@@ -31,7 +31,7 @@ const RATE: f64 = 5.0;
 /// The sheared test box with affine drag.
 fn dragged_box() -> Domain {
     let mut d = Domain::new(LO, LO + SIZE, [true; 3]).with_lees_edwards(RATE);
-    if let Some(le) = &mut d.lees_edwards {
+    if let Some(le) = d.as_lees_edwards_mut() {
         le.dynamics = ShearDynamics::AffineDrag;
     }
     d
@@ -162,7 +162,7 @@ fn a_crossing_keeps_the_velocity_and_the_path() {
             let crossed = path.y >= sim.domain.hi.y || path.y < sim.domain.lo.y;
             if crossed && inside {
                 let first = *wrapped_at.get_or_insert(k);
-                let s = sim.domain.lees_edwards.expect("sheared").shift;
+                let s = sim.domain.as_lees_edwards().expect("sheared").shift;
                 let expected = wrap_xz(&sim.domain, path - sign * DVec3::new(s, SIZE.y, 0.0));
                 let e = wrap_xz(&sim.domain, r) - expected;
                 worst = worst.max(
@@ -201,7 +201,7 @@ fn sheared_standard_problem(dynamics: ShearDynamics, steps: u64) -> (Simulation,
     let mut sim = standard_problem(1.0, LawKind::None, 0.2);
     // The problem starts with the lab profile; re-express its velocities for the dynamics.
     let lab = sim.domain.clone();
-    if let Some(le) = &mut sim.domain.lees_edwards {
+    if let Some(le) = sim.domain.as_lees_edwards_mut() {
         le.dynamics = dynamics;
     }
     for i in 0..sim.particles.len() {

@@ -143,7 +143,7 @@ fn lab_and_affine_drag_descriptions_of_a_state_give_the_same_fields() {
     }
     let contacts = lab.step_with::<ContactRecords>().expect("step").0;
     let mut affine = lab.clone();
-    let le = affine.domain.lees_edwards.as_mut().expect("sheared");
+    let le = affine.domain.as_lees_edwards_mut().expect("sheared");
     le.dynamics = ShearDynamics::AffineDrag;
     for i in 0..affine.particles.len() {
         let r = affine.particles.position[i];

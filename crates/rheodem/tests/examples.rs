@@ -156,7 +156,7 @@ fn every_example_runs_a_few_steps() {
             );
         }
         if let Some(derived) = shear_rate {
-            let le = sim.domain.lees_edwards.expect("sheared box");
+            let le = sim.domain.as_lees_edwards().expect("sheared box");
             assert_eq!(le.shear_rate, derived.shear_rate, "{name}");
             assert!(last.stress[1][1] > 0.0, "{name}: {last:?}");
             assert!(sim.stress_control.is_some(), "{name}");

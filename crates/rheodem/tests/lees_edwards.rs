@@ -60,7 +60,7 @@ fn sheared_box(fraction: f64) -> Domain {
 }
 
 fn shift(d: &Domain) -> f64 {
-    d.lees_edwards.expect("Lees-Edwards box").shift
+    d.as_lees_edwards().expect("Lees-Edwards box").shift
 }
 
 /// `x` brought into `[lo, hi)` along `x` and `z`.
@@ -268,7 +268,7 @@ fn pair_across_moving_boundary_matches_pair_inside() {
         let dt = contact_time(&law, A_REF) / 50.0;
         for (k, fraction) in [0.37, 0.8].into_iter().enumerate() {
             let mut domain = sheared_box(fraction);
-            if let Some(le) = &mut domain.lees_edwards {
+            if let Some(le) = domain.as_lees_edwards_mut() {
                 le.dynamics = dynamics;
             }
             for motion in [Motion::MeanFlow, Motion::LabRest] {
@@ -673,7 +673,7 @@ fn shift_integrates_breathing_box_height() {
         l_min = l_min.min(ly);
         l_max = l_max.max(ly);
         let s_before = shift(&d);
-        let wraps_before = d.lees_edwards.map_or(0, |le| le.wraps);
+        let wraps_before = d.as_lees_edwards().map_or(0, |le| le.wraps);
         d.advance(dt);
         d.scale_y((log_l(k + 1) - log_l(k)).exp(), &mut no_pos, &mut no_vel);
         let increment = 7.0 * ly * dt;
@@ -681,7 +681,7 @@ fn shift_integrates_breathing_box_height() {
         let s = shift(&d);
         assert!((-0.5 * lx..0.5 * lx).contains(&s), "shift {s} out of range");
         let jump = s - s_before;
-        let wrapped = d.lees_edwards.map_or(0, |le| le.wraps) > wraps_before;
+        let wrapped = d.as_lees_edwards().map_or(0, |le| le.wraps) > wraps_before;
         if wrapped {
             wraps_seen += 1;
             step_worst = step_worst.max((jump - (increment - lx)).abs());
@@ -705,7 +705,7 @@ fn shift_integrates_breathing_box_height() {
         naive_worst / lx
     );
     assert!(wraps_seen >= 10);
-    assert_eq!(d.lees_edwards.map_or(0, |le| le.wraps), wraps_seen);
+    assert_eq!(d.as_lees_edwards().map_or(0, |le| le.wraps), wraps_seen);
     assert!(worst < 1e-12 * lx);
     assert!(step_worst < 1e-12 * lx);
     assert!(
@@ -826,7 +826,7 @@ fn shift_and_stress_control_in_a_simulation() {
 /// `c_y ∈ {−1, 0, 1}`, then the nearest `x` and `z` images).
 fn min_image(d: &Domain, ri: DVec3, rj: DVec3) -> DVec3 {
     let l = d.lengths();
-    let s = d.lees_edwards.map_or(0.0, |le| le.shift);
+    let s = d.as_lees_edwards().map_or(0.0, |le| le.shift);
     let mut best = DVec3::splat(f64::INFINITY);
     for cy in -1..=1 {
         let c = cy as f64;
@@ -925,8 +925,9 @@ fn neighbour_list_is_complete_under_shear() {
         s.velocity.x += rate * (s.position.y - domain.lo.y);
     }
     let mut domain = domain.with_lees_edwards(rate);
-    if let Some(le) = &mut domain.lees_edwards {
-        le.shift = 0.25 * domain.hi.x - 0.25 * domain.lo.x;
+    let shift = 0.25 * domain.hi.x - 0.25 * domain.lo.x;
+    if let Some(le) = domain.as_lees_edwards_mut() {
+        le.shift = shift;
     }
     let mut sim = simulation(&spheres, law, domain, vec![], DVec3::ZERO, dt);
     let d = 2.0 * A_REF;
@@ -1071,7 +1072,7 @@ fn peculiar_contacts_subtract_the_boundarys_mean_flow() {
     let mut domain =
         Domain::new(DVec3::ZERO, DVec3::splat(edge), [true; 3]).with_lees_edwards(rate);
     assert_eq!(domain.contact_velocity_gradient(), None, "the lab frame");
-    domain.lees_edwards.as_mut().expect("sheared").dynamics = ShearDynamics::PeculiarContacts;
+    domain.as_lees_edwards_mut().expect("sheared").dynamics = ShearDynamics::PeculiarContacts;
     let gradient = domain
         .contact_velocity_gradient()
         .expect("peculiar contacts subtract the mean flow");

@@ -131,7 +131,7 @@ fn state(sim: &Simulation, id: u32) -> [DVec3; 5] {
 /// Distance (m) between the centres of `i` and `j`, through the nearest wedge image.
 fn pair_distance(sim: &Simulation, i: u32, j: u32) -> f64 {
     let (ri, rj) = (state(sim, i)[0], state(sim, j)[0]);
-    let w = sim.domain.wedge.expect("a wedge");
+    let w = sim.domain.as_wedge().expect("a wedge");
     (-1..=1)
         .map(|c| (ri - w.rotation(c) * rj).length())
         .fold(f64::INFINITY, f64::min)
@@ -760,7 +760,7 @@ fn rotor_load(at: RotorAt) -> (f64, f64) {
 
     let [r_w, ..] = state(&sim, 0);
     let [r_p, _, _, f_p, _] = state(&sim, 1);
-    let wedge = sim.domain.wedge.expect("a wedge");
+    let wedge = sim.domain.as_wedge().expect("a wedge");
     // The free sphere as the wall sphere sees it: through the nearest image.
     let c = (-1..=1)
         .min_by(|&a, &b| {
@@ -832,7 +832,7 @@ fn torque_on_a_wall_part() {
 /// through the nearest wedge image (the runs may wrap a particle at different steps):
 /// `(max |Δr| / A, max |Δv| / max |v|, max |Δω| / max |ω|)`.
 fn trajectory_difference(a: &Simulation, b: &Simulation, n: u32) -> [f64; 3] {
-    let wedge = a.domain.wedge.expect("a wedge");
+    let wedge = a.domain.as_wedge().expect("a wedge");
     let (mut dr, mut dv, mut dw, mut v_max, mut w_max) = (0.0f64, 0.0f64, 0.0f64, 0.0f64, 0.0f64);
     for id in 0..n {
         let [r1, v1, w1, ..] = state(a, id);
@@ -1071,7 +1071,7 @@ fn too_narrow_wedge_is_refused() {
 /// `c ∈ {−1, 0, 1}`, and over every free particle and wall.
 fn brute_force_contacts(sim: &Simulation) -> u64 {
     let p = &sim.particles;
-    let wedge = sim.domain.wedge.expect("a wedge");
+    let wedge = sim.domain.as_wedge().expect("a wedge");
     let mut count = 0;
     for i in 0..p.len() {
         for j in i + 1..p.len() {
@@ -1097,7 +1097,7 @@ fn brute_force_contacts(sim: &Simulation) -> u64 {
 /// Contacts between particles through a rotated image (`c = ±1`), by brute force.
 fn image_pair_contacts(sim: &Simulation) -> u64 {
     let p = &sim.particles;
-    let wedge = sim.domain.wedge.expect("a wedge");
+    let wedge = sim.domain.as_wedge().expect("a wedge");
     let mut count = 0;
     for i in 0..p.len() {
         for j in i + 1..p.len() {

@@ -1,92 +1,11 @@
 //! Lees-Edwards boundaries (docs/model.md §4.3–4.5): shear along `x`, gradient along `y`;
 //! the images across `y` are shifted along `x` and, in the lab frame, move faster along `x`.
 
+use super::boundary::{Boundary, Frame, translations, wrap_periodic_axes};
+pub use super::dynamics::ShearDynamics;
+use super::image::{IMAGE_COUNT, ImageTransform};
 use glam::{DMat3, DVec3};
 use serde::{Deserialize, Serialize};
-
-/// How a Lees-Edwards box moves its particles and what their stored velocities mean
-/// (docs/model.md §4.3–4.5).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
-#[serde(rename_all = "kebab-case")]
-pub enum ShearDynamics {
-    /// Lab frame (the default, §4.3): velocities are full velocities, `dv/dt = F/m`; images
-    /// across `y` move `±γ̇ L_y` along `x`, and contacts see the full relative velocity.
-    #[default]
-    Lab,
-    /// The lab-frame dynamics, but every contact subtracts the mean-flow difference
-    /// `γ̇ l_y x̂` of its two particles from its relative velocity (§4.4), for comparison.
-    PeculiarContacts,
-    /// Affine drag (§4.5, the dynamics of the source papers' code): velocities `c` are
-    /// relative to the mean flow and obey `dc/dt = F/m`; every free particle is moved by
-    /// `(c + γ̇ (y − lo_y) x̂) dt`; images carry no velocity jump and contacts see
-    /// `c_i − c_j`.
-    AffineDrag,
-}
-
-impl ShearDynamics {
-    /// Every option, in the order of the documentation.
-    pub const ALL: [ShearDynamics; 3] = [
-        ShearDynamics::Lab,
-        ShearDynamics::PeculiarContacts,
-        ShearDynamics::AffineDrag,
-    ];
-
-    /// The name used in scenario files and on the command line.
-    pub fn name(self) -> &'static str {
-        match self {
-            ShearDynamics::Lab => "lab",
-            ShearDynamics::PeculiarContacts => "peculiar-contacts",
-            ShearDynamics::AffineDrag => "affine-drag",
-        }
-    }
-}
-
-impl std::fmt::Display for ShearDynamics {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(self.name())
-    }
-}
-
-impl std::str::FromStr for ShearDynamics {
-    type Err = String;
-
-    fn from_str(s: &str) -> Result<ShearDynamics, String> {
-        ShearDynamics::ALL
-            .into_iter()
-            .find(|d| d.name() == s)
-            .ok_or_else(|| {
-                format!(
-                    "unknown shear dynamics {s:?}: expected lab, peculiar-contacts or affine-drag"
-                )
-            })
-    }
-}
-
-/// Reads a name (`"affine-drag"`), or the boolean of the older key `peculiar_contacts`
-/// (`true` = [`ShearDynamics::PeculiarContacts`], `false` = [`ShearDynamics::Lab`]), so that
-/// files written before the three options existed still read the same.
-impl<'de> Deserialize<'de> for ShearDynamics {
-    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<ShearDynamics, D::Error> {
-        struct Visitor;
-        impl serde::de::Visitor<'_> for Visitor {
-            type Value = ShearDynamics;
-            fn expecting(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-                f.write_str("\"lab\", \"peculiar-contacts\" or \"affine-drag\"")
-            }
-            fn visit_str<E: serde::de::Error>(self, v: &str) -> Result<ShearDynamics, E> {
-                v.parse().map_err(E::custom)
-            }
-            fn visit_bool<E: serde::de::Error>(self, v: bool) -> Result<ShearDynamics, E> {
-                Ok(if v {
-                    ShearDynamics::PeculiarContacts
-                } else {
-                    ShearDynamics::Lab
-                })
-            }
-        }
-        d.deserialize_any(Visitor)
-    }
-}
 
 /// Lees-Edwards boundaries (docs/model.md §4.3–4.5): shear along `x`, gradient along `y`.
 /// The image across `y = L_y` is shifted by `shift` in `x`; in the lab frame it also moves
@@ -201,6 +120,73 @@ impl LeesEdwards {
             if free(i) {
                 r.x += rate * (r.y - lo_y);
             }
+        }
+    }
+}
+
+impl Boundary for LeesEdwards {
+    #[inline]
+    fn mean_flow(&self, frame: &Frame, r: DVec3) -> DVec3 {
+        LeesEdwards::mean_flow(self, r.y - frame.lo.y)
+    }
+
+    fn velocity_gradient(&self) -> DMat3 {
+        LeesEdwards::velocity_gradient(self)
+    }
+
+    #[inline]
+    fn dynamics(&self) -> ShearDynamics {
+        self.dynamics
+    }
+
+    fn contact_velocity_gradient(&self) -> Option<DMat3> {
+        (self.dynamics == ShearDynamics::PeculiarContacts)
+            .then(|| LeesEdwards::velocity_gradient(self))
+    }
+
+    fn drag(&self, frame: &Frame, positions: &mut [DVec3], free: impl Fn(usize) -> bool, dt: f64) {
+        LeesEdwards::drag(self, positions, free, dt, frame.lo.y);
+    }
+
+    fn advance(&mut self, dt: f64, lengths: DVec3) -> Option<DMat3> {
+        let strain = LeesEdwards::advance(self, dt, lengths);
+        let mut shear = DMat3::IDENTITY;
+        shear.y_axis.x = strain;
+        Some(shear)
+    }
+
+    fn rescale(&mut self, scale: DVec3) {
+        self.shift *= scale.x;
+    }
+
+    fn image_epoch(&self) -> u64 {
+        self.wraps
+    }
+
+    /// The images across `y` are shifted by `c_y s` in `x` and, unless the particles are
+    /// dragged affinely (their velocities then exclude the mean flow), move `c_y γ̇ L_y`
+    /// faster in `x`.
+    fn image_transforms(&self, frame: &Frame) -> [ImageTransform; IMAGE_COUNT] {
+        let l = frame.lengths();
+        translations(l, self.shift, self.velocity_jump(l.y))
+    }
+
+    /// Crossing `y` also shifts `x` by `∓s` and, with full stored velocities, `v_x` by
+    /// `∓γ̇ L_y`; the other periodic axes are translated.
+    fn wrap(
+        &self,
+        frame: &Frame,
+        position: &mut DVec3,
+        velocity: &mut DVec3,
+        _spin: &mut DVec3,
+    ) -> ImageTransform {
+        let before = *position;
+        let l = frame.lengths();
+        self.wrap_y(position, velocity, frame.lo.y, frame.hi.y, l.y);
+        wrap_periodic_axes(frame, [false, true, false], position);
+        ImageTransform {
+            shift: *position - before,
+            ..ImageTransform::IDENTITY
         }
     }
 }

@@ -10,11 +10,13 @@
 //! [`Domain::mean_flow`] and [`Domain::peculiar_velocity`] (what a stored velocity means
 //! under the box's [`ShearDynamics`]).
 //!
-//! Each kind of boundary is a module of its own: [`lees_edwards`] (the sheared images across
-//! `y`, their velocity jump, the shift and its wraps, the mean flow, affine drag), [`wedge`]
-//! (the rotated images, their wrap and the sector's volume) and [`image`] (image codes and
-//! transforms); the box with its periodic axes is [`Domain`] itself, which asks the
-//! boundary it holds.
+//! Each kind of boundary is a module of its own behind one interface, the trait
+//! [`boundary::Boundary`] (whose defaults are the periodic box's answers): [`periodic`]
+//! (the box with its periodic axes alone), [`lees_edwards`] (the sheared images across `y`,
+//! their velocity jump, the shift and its wraps, the mean flow, affine drag) and [`wedge`]
+//! (the rotated images, their wrap and the sector's volume); [`registry`] lists them in the
+//! [`BoundaryKind`] a [`Domain`] holds, [`dynamics`] holds the shear dynamics and [`image`]
+//! the image codes and transforms. [`Domain`] is the box `[lo, hi]` and asks its boundary.
 //!
 //! A pair that interacts across a periodic boundary is stored in the neighbour list with an
 //! *image code*: which copy of the second particle it sees. The code is fixed between list
@@ -22,20 +24,28 @@
 //! that is compressed, a Lees-Edwards shift). The force loop asks the domain for the
 //! current transform of every code once per step.
 
+pub mod boundary;
+pub mod dynamics;
 pub mod image;
 pub mod lees_edwards;
+pub mod periodic;
+pub mod registry;
 pub mod wedge;
 
+pub use boundary::{Boundary, Frame};
+pub use dynamics::ShearDynamics;
 pub use image::{IDENTITY_IMAGE, IMAGE_COUNT, ImageTransform, image_code, image_offsets};
-pub use lees_edwards::{LeesEdwards, ShearDynamics};
+pub use lees_edwards::LeesEdwards;
+pub use registry::BoundaryKind;
 pub use wedge::Wedge;
 
 use glam::{DMat3, DVec3};
 use serde::{Deserialize, Serialize};
 
-/// An axis-aligned box `[lo, hi]` with per-axis periodicity, optionally sheared by
-/// Lees-Edwards boundaries.
+/// An axis-aligned box `[lo, hi]` with per-axis periodicity, closed by one boundary (the
+/// periodic box alone, Lees-Edwards shear or an angular-periodic wedge).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(from = "DomainRecord", into = "DomainRecord")]
 pub struct Domain {
     /// Lower corner (m).
     pub lo: DVec3,
@@ -43,15 +53,55 @@ pub struct Domain {
     pub hi: DVec3,
     /// Which of `x`, `y`, `z` are periodic.
     pub periodic: [bool; 3],
-    /// Lees-Edwards shear in `x`–`y`, if any (needs `x` and `y` periodic).
-    pub lees_edwards: Option<LeesEdwards>,
-    /// Angular-periodic wedge about `z`, if any (then no axis is periodic and `lo`, `hi`
-    /// bound the wedge's extent).
-    #[serde(default)]
-    pub wedge: Option<Wedge>,
+    /// The boundary that closes the box.
+    pub boundary: BoundaryKind,
     /// Accumulated deformation gradient of the box's affine motion (shear, rescaling) since
     /// the start; the neighbour list compares it between builds.
     pub deformation: DMat3,
+}
+
+/// A domain as checkpoints and outputs hold it: the boundary as one optional field per
+/// kind, as before boundaries were modules (so that earlier checkpoints load, and the
+/// bytes are the same).
+#[derive(Serialize, Deserialize)]
+struct DomainRecord {
+    lo: DVec3,
+    hi: DVec3,
+    periodic: [bool; 3],
+    lees_edwards: Option<LeesEdwards>,
+    #[serde(default)]
+    wedge: Option<Wedge>,
+    deformation: DMat3,
+}
+
+impl From<DomainRecord> for Domain {
+    fn from(r: DomainRecord) -> Domain {
+        let boundary = match (r.lees_edwards, r.wedge) {
+            (Some(le), _) => BoundaryKind::LeesEdwards(le),
+            (None, Some(w)) => BoundaryKind::Wedge(w),
+            (None, None) => BoundaryKind::Periodic,
+        };
+        Domain {
+            lo: r.lo,
+            hi: r.hi,
+            periodic: r.periodic,
+            boundary,
+            deformation: r.deformation,
+        }
+    }
+}
+
+impl From<Domain> for DomainRecord {
+    fn from(d: Domain) -> DomainRecord {
+        DomainRecord {
+            lo: d.lo,
+            hi: d.hi,
+            periodic: d.periodic,
+            lees_edwards: d.as_lees_edwards(),
+            wedge: d.as_wedge(),
+            deformation: d.deformation,
+        }
+    }
 }
 
 impl Domain {
@@ -61,8 +111,7 @@ impl Domain {
             lo,
             hi,
             periodic,
-            lees_edwards: None,
-            wedge: None,
+            boundary: BoundaryKind::Periodic,
             deformation: DMat3::IDENTITY,
         }
     }
@@ -87,7 +136,7 @@ impl Domain {
         lo.z = z_lo;
         hi.z = z_hi;
         let mut d = Domain::new(lo, hi, [false; 3]);
-        d.wedge = Some(Wedge {
+        d.boundary = BoundaryKind::Wedge(Wedge {
             angle,
             inner_radius: inner,
             outer_radius: outer,
@@ -97,24 +146,55 @@ impl Domain {
 
     /// Adds Lees-Edwards shear at rate `shear_rate` (1/s), shift zero.
     pub fn with_lees_edwards(mut self, shear_rate: f64) -> Domain {
-        self.lees_edwards = Some(LeesEdwards::new(shear_rate));
+        self.boundary = BoundaryKind::LeesEdwards(LeesEdwards::new(shear_rate));
         self
+    }
+
+    /// The Lees-Edwards boundary, if the box is sheared.
+    pub fn as_lees_edwards(&self) -> Option<LeesEdwards> {
+        match self.boundary {
+            BoundaryKind::LeesEdwards(le) => Some(le),
+            _ => None,
+        }
+    }
+
+    /// The Lees-Edwards boundary, to change it (its dynamics, its shift).
+    pub fn as_lees_edwards_mut(&mut self) -> Option<&mut LeesEdwards> {
+        match &mut self.boundary {
+            BoundaryKind::LeesEdwards(le) => Some(le),
+            _ => None,
+        }
+    }
+
+    /// The wedge, if the region is one.
+    pub fn as_wedge(&self) -> Option<Wedge> {
+        match self.boundary {
+            BoundaryKind::Wedge(w) => Some(w),
+            _ => None,
+        }
+    }
+
+    /// The box the boundary closes.
+    #[inline]
+    pub fn frame(&self) -> Frame {
+        Frame {
+            lo: self.lo,
+            hi: self.hi,
+            periodic: self.periodic,
+        }
     }
 
     /// Velocity of the mean flow at `r` (m/s): `γ̇ (y − lo_y) x̂` under Lees-Edwards shear,
     /// zero otherwise.
     #[inline]
     pub fn mean_flow(&self, r: DVec3) -> DVec3 {
-        match &self.lees_edwards {
-            Some(le) => le.mean_flow(r.y - self.lo.y),
-            None => DVec3::ZERO,
-        }
+        self.boundary.mean_flow(&self.frame(), r)
     }
 
     /// The dynamics of the sheared particles ([`ShearDynamics::Lab`] without shear).
+    #[inline]
     pub fn shear_dynamics(&self) -> ShearDynamics {
-        self.lees_edwards
-            .map_or(ShearDynamics::Lab, |le| le.dynamics)
+        self.boundary.dynamics()
     }
 
     /// True when the box itself moves the particles with the mean flow
@@ -157,20 +237,15 @@ impl Domain {
     /// Under affine drag, moves every free particle by the mean flow over `dt` (s),
     /// `x += γ̇ (y − lo_y) dt`; does nothing otherwise.
     pub fn drag_affinely(&self, positions: &mut [DVec3], free: impl Fn(usize) -> bool, dt: f64) {
-        if let Some(le) = &self.lees_edwards {
-            le.drag(positions, free, dt, self.lo.y);
-        }
+        self.boundary.drag(&self.frame(), positions, free, dt);
     }
 
     /// Advances the box's own motion over `dt` (s): the Lees-Edwards shift grows by
     /// `γ̇ L_y dt` (with the current `L_y`).
     pub fn advance(&mut self, dt: f64) {
         let l = self.lengths();
-        if let Some(le) = &mut self.lees_edwards {
-            let strain = le.advance(dt, l);
-            let mut shear = DMat3::IDENTITY;
-            shear.y_axis.x = strain;
-            self.deformation = shear * self.deformation;
+        if let Some(increment) = self.boundary.advance(dt, l) {
+            self.deformation = increment * self.deformation;
         }
     }
 
@@ -179,15 +254,14 @@ impl Domain {
     /// measure against the mean flow (Lees-Edwards with peculiar contacts, docs/model.md
     /// §4.4); `None` otherwise.
     pub fn contact_velocity_gradient(&self) -> Option<DMat3> {
-        self.lees_edwards
-            .filter(|le| le.dynamics == ShearDynamics::PeculiarContacts)
-            .map(|le| le.velocity_gradient())
+        self.boundary.contact_velocity_gradient()
     }
 
     /// How often the image codes have changed meaning (Lees-Edwards shift wraps).
     pub fn image_epoch(&self) -> u64 {
-        self.lees_edwards.map_or(0, |le| le.wraps)
+        self.boundary.image_epoch()
     }
+
     /// Box edge lengths (m).
     #[inline]
     pub fn lengths(&self) -> DVec3 {
@@ -196,11 +270,7 @@ impl Domain {
 
     /// Volume of the region (m³): the box, or the wedge's sector `½ Φ (R_o² − R_i²) L_z`.
     pub fn volume(&self) -> f64 {
-        let l = self.lengths();
-        match &self.wedge {
-            Some(w) => w.volume(l.z),
-            None => l.x * l.y * l.z,
-        }
+        self.boundary.volume(&self.frame())
     }
 
     /// The image codes the neighbour search must try besides the translations of the
@@ -208,18 +278,14 @@ impl Domain {
     /// image `c` is within `d` when `|T_c⁻¹ r_i − r_j| < d`. Empty without a wedge; the
     /// wedge's images rotate by `±Φ` (codes of offsets `(±1, 0, 0)`), one of them at `Φ = π`.
     pub fn rotated_images(&self) -> Vec<(u8, DMat3)> {
-        self.wedge.map_or_else(Vec::new, |w| w.rotated_images())
+        self.boundary.rotated_images()
     }
 
     /// The wedge turns (multiples of `Φ`) of an image code: its `x` offset under a wedge,
     /// zero otherwise.
     #[inline]
     pub fn image_turns(&self, code: u8) -> i32 {
-        if self.wedge.is_some() {
-            image_offsets(code)[0]
-        } else {
-            0
-        }
+        self.boundary.image_turns(code)
     }
 
     /// The current transformation of every image code. Under Lees-Edwards shear the images
@@ -227,22 +293,7 @@ impl Domain {
     /// affinely (their velocities then exclude the mean flow), move `c_y γ̇ L_y` faster in `x`.
     /// A wedge's images are rotations by `c_x Φ` about `z`.
     pub fn image_transforms(&self) -> [ImageTransform; IMAGE_COUNT] {
-        if let Some(w) = &self.wedge {
-            return w.image_transforms();
-        }
-        let l = self.lengths();
-        let (s, u) = self
-            .lees_edwards
-            .map_or((0.0, 0.0), |le| (le.shift, le.velocity_jump(l.y)));
-        std::array::from_fn(|code| {
-            let c = image_offsets(code as u8);
-            let (cx, cy, cz) = (c[0] as f64, c[1] as f64, c[2] as f64);
-            ImageTransform {
-                rotation: None,
-                shift: DVec3::new(cx * l.x + cy * s, cy * l.y, cz * l.z),
-                velocity_shift: DVec3::new(cy * u, 0.0, 0.0),
-            }
-        })
+        self.boundary.image_transforms(&self.frame())
     }
 
     /// Maps a particle back into the primary region and returns the map applied
@@ -256,44 +307,13 @@ impl Domain {
         velocity: &mut DVec3,
         spin: &mut DVec3,
     ) -> ImageTransform {
-        if let Some(w) = &self.wedge {
-            return w.wrap(position, velocity, spin);
-        }
-        let before = *position;
-        self.wrap_translation(position, velocity);
-        ImageTransform {
-            shift: *position - before,
-            ..ImageTransform::IDENTITY
-        }
+        self.boundary.wrap(&self.frame(), position, velocity, spin)
     }
 
     /// How many wedge angles `Φ` the azimuth of `r` lies outside `[0, Φ)` (zero without a
     /// wedge): [`Domain::wrap`] rotates such a particle by `−turns · Φ`.
     pub fn wedge_turns(&self, r: DVec3) -> i32 {
-        self.wedge.map_or(0, |w| w.turns(r))
-    }
-
-    fn wrap_translation(&self, position: &mut DVec3, velocity: &mut DVec3) {
-        let l = self.lengths();
-        if let Some(le) = &self.lees_edwards {
-            le.wrap_y(position, velocity, self.lo.y, self.hi.y, l.y);
-        }
-        for axis in 0..3 {
-            if self.periodic[axis] && !(axis == 1 && self.lees_edwards.is_some()) {
-                let x = position[axis];
-                if x < self.lo[axis] || x >= self.hi[axis] {
-                    let k = ((x - self.lo[axis]) / l[axis]).floor();
-                    let mut w = x - k * l[axis];
-                    if w >= self.hi[axis] {
-                        w -= l[axis];
-                    }
-                    if w < self.lo[axis] {
-                        w = self.lo[axis];
-                    }
-                    position[axis] = w;
-                }
-            }
-        }
+        self.boundary.turns(r)
     }
 
     /// Scales the box along `y` about its lower corner by `factor`, with the `y` coordinates.
@@ -303,7 +323,8 @@ impl Domain {
     /// rescaling included, and stay as they are.
     pub fn scale_y(&mut self, factor: f64, positions: &mut [DVec3], velocities: &mut [DVec3]) {
         let affine = self.drags_affinely();
-        let rate = self.lees_edwards.map_or(0.0, |le| le.shear_rate);
+        // The mean flow's `∂v_x/∂y`, which the moved coordinate carries.
+        let rate = self.boundary.velocity_gradient().y_axis.x;
         for (r, v) in positions.iter_mut().zip(velocities.iter_mut()) {
             let dy = (r.y - self.lo.y) * (factor - 1.0);
             r.y += dy;
@@ -328,9 +349,7 @@ impl Domain {
             *r = self.lo + (*r - self.lo) * s;
         }
         self.hi = self.lo + self.lengths() * s;
-        if let Some(le) = &mut self.lees_edwards {
-            le.shift *= s.x;
-        }
+        self.boundary.rescale(s);
         self.deformation = DMat3::from_diagonal(s) * self.deformation;
     }
 }
@@ -341,6 +360,75 @@ mod tests {
 
     fn cube() -> Domain {
         Domain::new(DVec3::ZERO, DVec3::splat(2.0), [true, true, false])
+    }
+
+    /// Checkpoints and outputs hold the boundary as one optional field per kind, as before
+    /// boundaries were modules: the same JSON and MessagePack, and each kind reads back.
+    #[test]
+    fn the_boundary_is_stored_as_before() {
+        let sheared = cube().with_lees_edwards(0.5);
+        let wedge = Domain::wedge(0.5, 1.0, 3.0, 0.0, 1.0);
+        for d in [cube(), sheared.clone(), wedge.clone()] {
+            let json = serde_json::to_value(&d).expect("json");
+            let mut keys: Vec<&str> = json
+                .as_object()
+                .expect("object")
+                .keys()
+                .map(String::as_str)
+                .collect();
+            keys.sort_unstable();
+            assert_eq!(
+                keys,
+                [
+                    "deformation",
+                    "hi",
+                    "lees_edwards",
+                    "lo",
+                    "periodic",
+                    "wedge"
+                ],
+                "{json}"
+            );
+            let back: Domain = serde_json::from_value(json).expect("reads back");
+            assert_eq!(back, d);
+            let bytes = rmp_serde::to_vec_named(&d).expect("msgpack");
+            assert_eq!(rmp_serde::from_slice::<Domain>(&bytes).expect("msgpack"), d);
+        }
+        let json = serde_json::to_value(&sheared).expect("json");
+        assert_eq!(json["lees_edwards"]["shear_rate"], 0.5);
+        assert!(json["wedge"].is_null());
+        // A record without `wedge` (checkpoints from before the wedge) is the box.
+        let mut old = serde_json::to_value(cube()).expect("json");
+        old.as_object_mut().expect("object").remove("wedge");
+        let read: Domain = serde_json::from_value(old).expect("old record");
+        assert_eq!(read.boundary, BoundaryKind::Periodic);
+    }
+
+    /// The periodic box answers with the trait's defaults: no mean flow, the box's volume,
+    /// images translated by the edges, wraps along the periodic axes only.
+    #[test]
+    fn the_periodic_box_is_the_default_boundary() {
+        let d = cube();
+        assert_eq!(d.boundary, BoundaryKind::Periodic);
+        assert_eq!(d.mean_flow(DVec3::splat(1.0)), DVec3::ZERO);
+        assert_eq!(d.contact_velocity_gradient(), None);
+        assert_eq!(d.volume(), 8.0);
+        assert!(d.rotated_images().is_empty());
+        let t = d.image_transforms();
+        assert_eq!(
+            t[image_code([1, -1, 0]) as usize].shift,
+            DVec3::new(2.0, -2.0, 0.0)
+        );
+        assert_eq!(t[image_code([1, -1, 0]) as usize].velocity_shift.x, 0.0);
+        let mut sheared = cube().with_lees_edwards(0.5);
+        sheared.as_lees_edwards_mut().expect("sheared").shift = 0.25;
+        let t = sheared.image_transforms();
+        assert_eq!(
+            t[image_code([0, 1, 0]) as usize].shift,
+            DVec3::new(0.25, 2.0, 0.0)
+        );
+        assert_eq!(t[image_code([0, 1, 0]) as usize].velocity_shift.x, 1.0);
+        assert_eq!(sheared.mean_flow(DVec3::new(0.0, 1.5, 0.0)).x, 0.75);
     }
 
     #[test]
@@ -384,7 +472,7 @@ mod tests {
         assert!(e.contains("sllod") && e.contains("affine-drag"), "{e}");
         // Checkpoints (MessagePack, named fields) of either spelling read back.
         let mut le = Domain::new(DVec3::ZERO, DVec3::ONE, [true; 3]).with_lees_edwards(2.0);
-        le.lees_edwards.as_mut().expect("sheared").dynamics = ShearDynamics::AffineDrag;
+        le.as_lees_edwards_mut().expect("sheared").dynamics = ShearDynamics::AffineDrag;
         let bytes = rmp_serde::to_vec_named(&le).expect("encode");
         assert_eq!(rmp_serde::from_slice::<Domain>(&bytes).expect("decode"), le);
     }

@@ -2,6 +2,7 @@
 //! are rotations by `±Φ`, and a particle leaving through one face re-enters through the other
 //! with its position, velocity and spin rotated.
 
+use super::boundary::{Boundary, Frame};
 use super::image::{IMAGE_COUNT, ImageTransform, image_code, image_offsets};
 use glam::{DMat3, DVec3};
 use serde::{Deserialize, Serialize};
@@ -131,4 +132,39 @@ fn wedge_turns(angle: f64, r: DVec3) -> i32 {
         }
     }
     turns
+}
+
+impl Boundary for Wedge {
+    /// The sector `½ Φ (R_o² − R_i²) L_z`.
+    fn volume(&self, frame: &Frame) -> f64 {
+        Wedge::volume(self, frame.lengths().z)
+    }
+
+    fn rotated_images(&self) -> Vec<(u8, DMat3)> {
+        Wedge::rotated_images(self)
+    }
+
+    /// Its `x` offset: the images rotate by `c_x Φ`.
+    #[inline]
+    fn image_turns(&self, code: u8) -> i32 {
+        image_offsets(code)[0]
+    }
+
+    fn turns(&self, r: DVec3) -> i32 {
+        Wedge::turns(self, r)
+    }
+
+    fn image_transforms(&self, _frame: &Frame) -> [ImageTransform; IMAGE_COUNT] {
+        Wedge::image_transforms(self)
+    }
+
+    fn wrap(
+        &self,
+        _frame: &Frame,
+        position: &mut DVec3,
+        velocity: &mut DVec3,
+        spin: &mut DVec3,
+    ) -> ImageTransform {
+        Wedge::wrap(self, position, velocity, spin)
+    }
 }

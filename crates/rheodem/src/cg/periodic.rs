@@ -177,7 +177,7 @@ impl LabView {
         for r in &mut particles {
             r.velocity = sim.domain.lab_velocity(r.position, r.velocity);
         }
-        if let Some(le) = &mut domain.lees_edwards {
+        if let Some(le) = domain.as_lees_edwards_mut() {
             le.dynamics = ShearDynamics::Lab;
         }
         LabView {

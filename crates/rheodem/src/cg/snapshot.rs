@@ -277,7 +277,7 @@ pub fn images_for(domain: &Domain, grid: &Grid) -> Vec<ImageTransform> {
         return Vec::new();
     }
     let all = domain.image_transforms();
-    if domain.wedge.is_some() {
+    if domain.as_wedge().is_some() {
         return domain
             .rotated_images()
             .iter()

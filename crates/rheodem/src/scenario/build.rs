@@ -1222,7 +1222,7 @@ fn configure_flow(s: &Scenario, simulation: &mut Simulation) -> Result<(), Scena
             ));
         }
         simulation.domain = simulation.domain.clone().with_lees_edwards(rate);
-        if let Some(le) = &mut simulation.domain.lees_edwards {
+        if let Some(le) = simulation.domain.as_lees_edwards_mut() {
             le.dynamics = s.domain.shear_dynamics;
         }
         // The prepared velocities become those relative to the mean flow.
