@@ -1,7 +1,8 @@
 //! The `rheodem` command-line program: the subcommands and the helpers they share (worker
 //! threads, memory limits). Each subcommand lives in a file of its own: `scenario_run.rs`
 //! (`run`, `resume`, `check`), `bench.rs`, `shear.rs`, `split_bottom.rs`, `study.rs`,
-//! `cg.rs`, `predict.rs`, `contact.rs`.
+//! `cg.rs`, `predict.rs`, `contact.rs`, `setups.rs`; `setup_args.rs` derives a set-up's
+//! options from its parameters.
 
 mod bench;
 mod cg;
@@ -10,6 +11,8 @@ mod law_arg;
 mod predict;
 mod progress;
 mod scenario_run;
+mod setup_args;
+mod setups;
 mod shear;
 mod split_bottom;
 mod study;
@@ -101,6 +104,9 @@ enum Command {
     /// Contact-law tools: force–overlap curves, equivalent linear model.
     #[command(subcommand)]
     Contact(contact::ContactCommand),
+    /// The registered set-ups, and each one's parameters (key, unit, meaning, allowed
+    /// values, default) as a markdown table.
+    Setups(setups::SetupsArgs),
     /// Check a scenario and print its resolved values, without running it (not even its
     /// preparation: the preparation's outcome is only known from `run`).
     Check(scenario_run::CheckArgs),
@@ -239,6 +245,7 @@ fn dispatch(cli: Cli) -> Result<()> {
         Command::Study(cmd) => study::study(cmd),
         Command::Compare { dir, figures } => shear::compare(&dir, figures.as_deref()),
         Command::Check(args) => scenario_run::check(args),
+        Command::Setups(args) => setups::run(&args),
         Command::Bench(args) => bench::run(args),
     }
 }

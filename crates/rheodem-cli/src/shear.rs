@@ -1,9 +1,9 @@
 //! `rheodem shear-box` and `rheodem sweep`.
 
+use crate::setup_args::Parameters;
 use anyhow::{Context, Result, bail};
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
-use rheodem::domain::ShearDynamics;
 use rheodem::io::atomic::write_atomic;
 use rheodem::io::made_by::{self, Maker};
 use rheodem::run::RunError;
@@ -16,71 +16,16 @@ use rheodem::setups::sweep::{
 use std::path::{Path, PathBuf};
 use std::sync::Mutex;
 
-/// Arguments of `shear-box`: every option overrides the same key of `--config`.
+/// Arguments of `shear-box`: the point's parameters (every option overrides the same key
+/// of `--config`) and how to run it.
 #[derive(Args)]
 #[command(allow_negative_numbers = true)]
 pub struct ShearBoxArgs {
     /// A TOML file with the point's keys (mu_p, inertial, softness, bond, cohesion, …).
     #[arg(long)]
     config: Option<PathBuf>,
-    /// Particle friction μ_p, in [0, 10] (required).
-    #[arg(long)]
-    mu_p: Option<f64>,
-    /// Inertial number I, in (0, 2] (required).
-    #[arg(long)]
-    inertial: Option<f64>,
-    /// Softness p*, in (0, 0.2] (required).
-    #[arg(long)]
-    softness: Option<f64>,
-    /// Bond number Bo, in [0, 100] [default: 0].
-    #[arg(long)]
-    bond: Option<f64>,
-    /// Cohesion law: none, reversible, liquid_bridge, linear_irreversible [default: none].
-    #[arg(long)]
-    cohesion: Option<String>,
-    /// Rupture distance of the irreversible laws, S_c/d_p, in (0, 2] [default: 0.225].
-    #[arg(long)]
-    range: Option<f64>,
-    /// Mean diameter d_p (m), > 0 [default: 0.0022].
-    #[arg(long)]
-    diameter: Option<f64>,
-    /// Density ρ_p (kg/m³), > 0 [default: 2000].
-    #[arg(long)]
-    density: Option<f64>,
-    /// Normal stiffness k_n (N/m), > 0 [default: 100].
-    #[arg(long)]
-    stiffness: Option<f64>,
-    /// Restitution coefficient e, in (0, 1] [default: 0.8].
-    #[arg(long)]
-    restitution: Option<f64>,
-    /// Polydispersity w = r_max/r_min, in [1, 20] [default: 3].
-    #[arg(long)]
-    polydispersity: Option<f64>,
-    /// Number of particles N, in [16, 10⁷] [default: 4096].
-    #[arg(long)]
-    particles: Option<usize>,
-    /// Total shear strain, > 0 [default: 20].
-    #[arg(long)]
-    strain: Option<f64>,
-    /// Strain before averaging, below the total strain [default: 5].
-    #[arg(long)]
-    transient_strain: Option<f64>,
-    /// Seed (0 to 2⁶³ − 1, the range a TOML file holds) [default: 1].
-    #[arg(long, value_parser = clap::value_parser!(u64).range(..=i64::MAX as u64))]
-    seed: Option<u64>,
-    /// Shear dynamics (docs/model.md §4.3–4.5): lab (the default), peculiar-contacts (lab
-    /// dynamics, contacts without the mean-flow difference) or affine-drag (the source
-    /// papers' code: particles dragged with the mean flow, velocities relative to it).
-    #[arg(long, value_parser = clap::value_parser!(ShearDynamics))]
-    shear_dynamics: Option<ShearDynamics>,
-    /// Slabs along y of the coarse-grained fields averaged over the steady-state window
-    /// (fields.csv, fields.vti); 0 for none.
-    #[arg(long)]
-    cg_slabs: Option<usize>,
-    /// Also store the fields' samples (particles, contacts and box, under DIR/fields/), so
-    /// that `rheodem cg DIR` can coarse-grain the run again with other settings.
-    #[arg(long)]
-    cg_records: bool,
+    #[command(flatten)]
+    parameters: Parameters<ShearBoxSpec>,
     /// Run directory (default: runs/shear-box).
     #[arg(long, short)]
     out: Option<PathBuf>,
@@ -94,83 +39,6 @@ pub struct ShearBoxArgs {
     /// same point resumes, and another is refused).
     #[arg(long)]
     force: bool,
-}
-
-fn spec_from(a: &ShearBoxArgs) -> Result<ShearBoxSpec> {
-    let mut table: toml::Table = match &a.config {
-        Some(path) => {
-            let text = std::fs::read_to_string(path)
-                .with_context(|| format!("cannot read {}", path.display()))?;
-            toml::from_str(&text)
-                .with_context(|| format!("{} is not valid TOML", path.display()))?
-        }
-        None => toml::Table::new(),
-    };
-    if a.shear_dynamics.is_some() {
-        // The option replaces the older spelling of a config file.
-        table.remove("peculiar_contacts");
-    }
-    let mut overrides: Vec<(&str, toml::Value)> = Vec::new();
-    let mut set = |k: &'static str, v: Option<toml::Value>| {
-        if let Some(v) = v {
-            overrides.push((k, v));
-        }
-    };
-    let f = |x: Option<f64>| x.map(toml::Value::Float);
-    set("mu_p", f(a.mu_p));
-    set("inertial", f(a.inertial));
-    set("softness", f(a.softness));
-    set("bond", f(a.bond));
-    set("cohesion", a.cohesion.clone().map(toml::Value::String));
-    set("range", f(a.range));
-    set("diameter", f(a.diameter));
-    set("density", f(a.density));
-    set("stiffness", f(a.stiffness));
-    set("restitution", f(a.restitution));
-    set("polydispersity", f(a.polydispersity));
-    set(
-        "particles",
-        a.particles.map(|n| toml::Value::Integer(n as i64)),
-    );
-    set(
-        "cg_slabs",
-        a.cg_slabs.map(|n| toml::Value::Integer(n as i64)),
-    );
-    if a.cg_records {
-        set("cg_records", Some(toml::Value::Boolean(true)));
-    }
-    set("strain", f(a.strain));
-    set("transient_strain", f(a.transient_strain));
-    set(
-        "seed",
-        a.seed
-            .and_then(|n| i64::try_from(n).ok())
-            .map(toml::Value::Integer),
-    );
-    set(
-        "shear_dynamics",
-        a.shear_dynamics
-            .map(|d| toml::Value::String(d.name().into())),
-    );
-    // The config file is valid on its own (an option overriding a bad value does not hide
-    // it): its values, completed by the options only where it has none.
-    if let Some(path) = &a.config {
-        let mut probe = table.clone();
-        for (k, v) in &overrides {
-            probe.entry(k.to_string()).or_insert_with(|| v.clone());
-        }
-        ShearBoxSpec::from_table(probe)
-            .map_err(anyhow::Error::from)
-            .and_then(|s| s.derive().map(|_| ()).map_err(anyhow::Error::from))
-            .with_context(|| format!("in {}", path.display()))?;
-    }
-    for (k, v) in overrides {
-        table.insert(k.to_string(), v);
-    }
-    let spec =
-        ShearBoxSpec::from_table(table).map_err(|e| anyhow::anyhow!("shear-box point: {e}"))?;
-    spec.derive()?;
-    Ok(spec)
 }
 
 fn bar(total: u64, quiet: bool, prefix: String) -> ProgressBar {
@@ -189,7 +57,7 @@ fn bar(total: u64, quiet: bool, prefix: String) -> ProgressBar {
 
 /// Runs `shear-box`.
 pub fn shear_box(a: ShearBoxArgs) -> Result<()> {
-    let spec = spec_from(&a)?;
+    let spec = a.parameters.spec(a.config.as_deref())?;
     let dv = spec.derive()?;
     let dir = a
         .out
@@ -557,7 +425,8 @@ pub enum DbCommand {
         #[arg(long)]
         study: Option<String>,
     },
-    /// Write the points (of one study, or all) as CSV.
+    /// Write the shear-box points (of one study, or all) as CSV; or the split-bottom cells,
+    /// or every stored value of any set-up.
     Export {
         /// The database file.
         #[arg(long)]
@@ -565,9 +434,13 @@ pub enum DbCommand {
         /// Only this study.
         #[arg(long)]
         study: Option<String>,
-        /// The split-bottom cells (table `cells`) instead of the shear-box points.
-        #[arg(long)]
+        /// The split-bottom cells (view `cells`) instead of the shear-box points.
+        #[arg(long, conflicts_with = "values")]
         cells: bool,
+        /// Every stored number and name of the runs of any set-up, one row per key
+        /// (table `run_values`: study, name, setup, kind, key, value, error, text).
+        #[arg(long)]
+        values: bool,
         /// Output file (default: standard output).
         #[arg(long, short)]
         out: Option<PathBuf>,
@@ -606,13 +479,16 @@ pub fn db(cmd: DbCommand) -> Result<()> {
             db,
             study,
             cells,
+            values,
             out,
         } => {
             if !db.exists() {
                 bail!("{} does not exist", db.display());
             }
             let database = ResultsDb::open(&db)?;
-            let csv = if cells {
+            let csv = if values {
+                database.export_values_csv(study.as_deref())?
+            } else if cells {
                 database.export_cells_csv(study.as_deref())?
             } else {
                 database.export_csv(study.as_deref())?

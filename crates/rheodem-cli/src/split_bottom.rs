@@ -1,16 +1,16 @@
 //! `rheodem split-bottom`: the split-bottom ring shear cell (fill, settle, shear).
 
 use crate::progress::Progress;
+use crate::setup_args::Parameters;
 use anyhow::{Context, Result, bail};
 use clap::Args;
 use rheodem::io::atomic::write_atomic;
 use rheodem::io::made_by::{self, Maker};
-use rheodem::setups::split_bottom::{
-    Cohesion, SplitBottomRun, SplitBottomSpec, Stage, TimeStepRule,
-};
+use rheodem::setups::split_bottom::{SplitBottomRun, SplitBottomSpec, Stage};
 use std::path::{Path, PathBuf};
 
-/// Arguments of `split-bottom`: every option overrides the same key of `--config`.
+/// Arguments of `split-bottom`: the cell's parameters (every option overrides the same key
+/// of `--config`) and how to run it.
 #[derive(Args)]
 #[command(allow_negative_numbers = true)]
 pub struct SplitBottomArgs {
@@ -18,56 +18,8 @@ pub struct SplitBottomArgs {
     /// options override it.
     #[arg(long)]
     config: Option<PathBuf>,
-    /// Angular velocity Ω of the outer parts (rad/s), ≥ 0 [default: 0.5].
-    #[arg(long)]
-    omega: Option<f64>,
-    /// Gravity g (m/s²), ≥ 0 [default: 9.81].
-    #[arg(long)]
-    gravity: Option<f64>,
-    /// Adhesive law: dry, willett, linear [default: dry].
-    #[arg(long)]
-    law: Option<String>,
-    /// Surface tension γ_s of the Willett law (N/m), > 0 [default with --law willett: 0.02].
-    #[arg(long)]
-    surface_tension: Option<f64>,
-    /// Bridge volume V_b of the Willett law (nl = 1e-12 m³), ≥ 0 (0: attraction only while
-    /// touching), with a rupture distance below the mean diameter [default with --law
-    /// willett: 75].
-    #[arg(long)]
-    volume_nl: Option<f64>,
-    /// f_a^max of the linear irreversible law (N), > 0 (required with --law linear).
-    #[arg(long)]
-    max_force: Option<f64>,
-    /// k_c of the linear irreversible law (N/m), > 0, with f_a^max/k_c below the mean
-    /// diameter (required with --law linear).
-    #[arg(long)]
-    adhesive_stiffness: Option<f64>,
-    /// Particle friction μ_p, ≥ 0 [default: 0.01].
-    #[arg(long)]
-    mu_p: Option<f64>,
-    /// Shear duration (s), > 0 [default: 4].
-    #[arg(long)]
-    duration: Option<f64>,
-    /// Start of the averaging window (s after the start of shear), in [0, duration)
-    /// [default: 2].
-    #[arg(long)]
-    average_from: Option<f64>,
-    /// Factor on the cell's lengths (not the particles), at least about 0.18 (two
-    /// diameters across each part; a small cell also needs a wider --wedge-deg) and within
-    /// the memory limit [default: 1].
-    #[arg(long)]
-    scale: Option<f64>,
-    /// Wedge angle Φ (degrees), in (0, 180] and wide enough at the inner wall for a
-    /// particle not to reach its own image [default: 30].
-    #[arg(long)]
-    wedge_deg: Option<f64>,
-    /// Time-step rule: shortest (engine default) or mean-pair (the source papers' code)
-    /// [default: shortest].
-    #[arg(long)]
-    time_step: Option<String>,
-    /// Random seed of the filling [default: 1].
-    #[arg(long)]
-    seed: Option<u64>,
+    #[command(flatten)]
+    parameters: Parameters<SplitBottomSpec>,
     /// Start shearing from the settled state of this earlier split-bottom run directory.
     #[arg(long)]
     from: Option<PathBuf>,
@@ -87,118 +39,6 @@ pub struct SplitBottomArgs {
     /// the machine's physical memory).
     #[arg(long, value_name = "SIZE")]
     max_memory: Option<String>,
-}
-
-impl SplitBottomArgs {
-    /// The spec: defaults, then the config file, then the options.
-    fn spec(&self) -> Result<SplitBottomSpec> {
-        let mut s = match &self.config {
-            Some(path) => {
-                let text = std::fs::read_to_string(path)
-                    .with_context(|| format!("cannot read {}", path.display()))?;
-                SplitBottomSpec::from_toml(&text)
-                    .with_context(|| format!("in {}", path.display()))?
-            }
-            None => SplitBottomSpec::default(),
-        };
-        let set = |slot: &mut f64, v: Option<f64>| {
-            if let Some(v) = v {
-                *slot = v;
-            }
-        };
-        set(&mut s.omega, self.omega);
-        set(&mut s.gravity, self.gravity);
-        set(&mut s.friction, self.mu_p);
-        set(&mut s.duration, self.duration);
-        set(&mut s.average_from, self.average_from);
-        if self.average_from.is_none() && s.average_from >= s.duration {
-            bail!(
-                "--duration {} ends before the averaging window starts (average_from = {} s, \
-                 the default unless --config sets it): give --average-from below the duration",
-                s.duration,
-                s.average_from
-            );
-        }
-        set(&mut s.scale, self.scale);
-        set(&mut s.wedge_deg, self.wedge_deg);
-        if let Some(seed) = self.seed {
-            s.seed = seed;
-        }
-        if let Some(rule) = &self.time_step {
-            s.time_step = match rule.as_str() {
-                "shortest" => TimeStepRule::Shortest,
-                "mean-pair" => TimeStepRule::MeanPair,
-                other => anyhow::bail!("--time-step {other}: must be shortest or mean-pair"),
-            };
-        }
-        let law = self.law.as_deref().unwrap_or(match s.cohesion {
-            Cohesion::Dry => "dry",
-            Cohesion::Willett { .. } => "willett",
-            Cohesion::Linear { .. } => "linear",
-        });
-        let stray = |given: &[(&str, bool)], needs: &str| -> Result<()> {
-            match given.iter().find(|(_, g)| *g) {
-                Some((flag, _)) if law != needs => bail!(
-                    "{flag} is an option of --law {needs}, but the law is {law}: add \
-                     --law {needs} or leave {flag} out"
-                ),
-                _ => Ok(()),
-            }
-        };
-        stray(
-            &[
-                ("--surface-tension", self.surface_tension.is_some()),
-                ("--volume-nl", self.volume_nl.is_some()),
-            ],
-            "willett",
-        )?;
-        stray(
-            &[
-                ("--max-force", self.max_force.is_some()),
-                ("--adhesive-stiffness", self.adhesive_stiffness.is_some()),
-            ],
-            "linear",
-        )?;
-        s.cohesion = match law {
-            "dry" => Cohesion::Dry,
-            "willett" => {
-                let (g0, v0, a0) = match s.cohesion {
-                    Cohesion::Willett {
-                        surface_tension,
-                        volume,
-                        contact_angle_deg,
-                    } => (surface_tension, volume, contact_angle_deg),
-                    _ => (0.020, 75e-12, 20.0),
-                };
-                Cohesion::Willett {
-                    surface_tension: self.surface_tension.unwrap_or(g0),
-                    volume: self.volume_nl.map_or(v0, |v| v * 1e-12),
-                    contact_angle_deg: a0,
-                }
-            }
-            "linear" => {
-                let (f0, k0) = match s.cohesion {
-                    Cohesion::Linear {
-                        max_force,
-                        stiffness,
-                    } => (Some(max_force), Some(stiffness)),
-                    _ => (None, None),
-                };
-                match (self.max_force.or(f0), self.adhesive_stiffness.or(k0)) {
-                    (Some(max_force), Some(stiffness)) => Cohesion::Linear {
-                        max_force,
-                        stiffness,
-                    },
-                    _ => anyhow::bail!(
-                        "--law linear needs --max-force and --adhesive-stiffness (or both in \
-                         the config's cohesion table)"
-                    ),
-                }
-            }
-            other => anyhow::bail!("--law {other}: must be dry, willett or linear"),
-        };
-        Ok(s)
-    }
 }
 
 /// The keys whose values differ between the spec of a run on disk (`old`) and the one
@@ -236,7 +76,7 @@ fn estimate(spec: &SplitBottomSpec, threads: usize, limit: Option<u64>, quiet: b
 
 /// Runs `rheodem split-bottom`.
 pub fn run(args: SplitBottomArgs) -> Result<()> {
-    let spec = args.spec()?;
+    let spec = args.parameters.spec(args.config.as_deref())?;
     let limit = crate::memory_limit(args.max_memory.as_deref())?;
     let (pool, threads) = crate::pool(args.threads)?;
     let dir = args

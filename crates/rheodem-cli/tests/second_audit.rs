@@ -141,7 +141,7 @@ fn r2_to_r8_bad_inputs_are_refused_naming_their_key() {
         (
             "R3 negative surface tension",
             with_short(&["--law", "willett", "--surface-tension", "-0.02"]),
-            vec!["cohesion.surface_tension"],
+            vec!["`surface_tension` = -0.02"],
             vec![],
         ),
         (
@@ -153,13 +153,13 @@ fn r2_to_r8_bad_inputs_are_refused_naming_their_key() {
         (
             "R3 surface tension without the Willett law",
             with_short(&["--surface-tension", "0.02"]),
-            vec!["--surface-tension", "--law willett"],
+            vec!["`surface_tension`", "law = willett"],
             vec![],
         ),
         (
             "R3 bridge volume without the Willett law",
             with_short(&["--volume-nl", "75"]),
-            vec!["--volume-nl"],
+            vec!["`volume_nl`"],
             vec![],
         ),
         (
@@ -172,7 +172,7 @@ fn r2_to_r8_bad_inputs_are_refused_naming_their_key() {
                 "--adhesive-stiffness",
                 "1",
             ]),
-            vec!["cohesion.max_force"],
+            vec!["`max_force` = -1"],
             vec![],
         ),
         (

@@ -19,10 +19,10 @@ fn bad_input_is_refused_with_the_key_named() {
             "must be at least",
         ),
         (&["split-bottom", "--omega", "-1"], "`omega` = -1"),
-        (&["split-bottom", "--law", "linear"], "--max-force"),
+        (&["split-bottom", "--law", "linear"], "needs max_force"),
         (
             &["split-bottom", "--law", "glue"],
-            "must be dry, willett or linear",
+            "`law` = \"glue\": must be one of dry, willett, linear",
         ),
     ];
     for (args, expected) in cases {

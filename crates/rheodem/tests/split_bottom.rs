@@ -173,7 +173,7 @@ fn bad_geometry_gets_specific_errors() {
                 wedge_deg: 0.0,
                 ..base.clone()
             },
-            "`wedge_deg` = 0: must be in (0, 180]",
+            "`wedge_deg` = 0: must lie in (0, 180]",
         ),
         (
             SplitBottomSpec {

@@ -1,20 +1,28 @@
-//! The results database: every finished point of every study in one SQLite file
-//! (docs/studies.md), which many processes may write at once and anyone can query with
-//! `sqlite3`, Python or R.
+//! The results database: every finished run of every study, of any set-up, in one SQLite
+//! file (docs/studies.md), which many processes may write at once and anyone can query
+//! with `sqlite3`, Python or R.
 //!
-//! Two tables: `points` for shear-box points and `cells` for split-bottom cells (schema
-//! version 2; a version-1 file gains the `cells` table when opened). In `points`, one row
-//! per `(study, name)`. A row holds the state point's
-//! controls, the steady-state averages with their standard errors, and the run's
-//! bookkeeping: wall time, commit, insertion time. It also keeps the full JSON of the
-//! point's spec and result, so nothing is lost when a column is missing. Writers open the
-//! file in WAL mode with a busy timeout (the set-up under a lock on `FILE.lock`), and each
-//! insertion is one `IMMEDIATE` transaction. So concurrent writers (the jobs of a sweep,
-//! array tasks of a cluster) wait for each other instead of failing, and a killed writer
-//! leaves the file consistent.
+//! One schema for every set-up (version 3). The table `runs` holds one row per
+//! `(study, name)`: the set-up's name, whether the run reached a steady state, its wall
+//! time, commit and insertion time, and the full JSON of its parameters (the spec) and its
+//! results (its summary). The table `run_values` holds every number and name of those two
+//! documents, one row per key (`kind` `parameter` or `result`, the key as a dotted path
+//! such as `cohesion.volume` or `steady_state.friction`, a mean with its standard error
+//! folded into one row), so that any set-up's parameter or result can be selected in SQL
+//! without a column of its own; a set-up added later is stored without a change here. The
+//! views `points` (shear-box points) and `cells` (split-bottom cells) give the columns of
+//! schema version 2, which older files had as tables: opening such a file moves their rows
+//! into `runs` and `run_values` in one transaction.
+//!
+//! Writers open the file in WAL mode with a busy timeout (the set-up under a lock on
+//! `FILE.lock`), and each insertion is one `IMMEDIATE` transaction. So concurrent writers
+//! (the jobs of a sweep, array tasks of a cluster) wait for each other instead of failing,
+//! and a killed writer leaves the file consistent.
 
 use super::sweep::PointResult;
-use rusqlite::{Connection, OptionalExtension, TransactionBehavior, params};
+use rusqlite::types::Value as Sql;
+use rusqlite::{Connection, OptionalExtension, Transaction, TransactionBehavior, params};
+use serde_json::Value;
 use std::fmt::Write;
 use std::path::{Path, PathBuf};
 use std::time::Duration;
@@ -22,135 +30,163 @@ use std::time::Duration;
 /// How long a writer waits for another's transaction before giving up.
 const BUSY_TIMEOUT: Duration = Duration::from_secs(120);
 
-/// The schema version this code writes (`PRAGMA user_version`): 1 had `points` only.
-const SCHEMA_VERSION: i64 = 2;
+/// The schema version this code writes (`PRAGMA user_version`): 1 had the table `points`
+/// only, 2 the tables `points` and `cells`, 3 `runs` and `run_values` with those two as
+/// views.
+const SCHEMA_VERSION: i64 = 3;
 
-/// The `points` table. Columns after `commit_id` are the JSON documents.
-const SCHEMA: &str = "
-CREATE TABLE IF NOT EXISTS points (
+/// The tables. `run_values.value` has no declared type, so that SQLite keeps what is
+/// stored: whole numbers (counts, seeds) as integers, exactly, the rest as reals.
+const TABLES: &str = "
+CREATE TABLE IF NOT EXISTS runs (
     study TEXT NOT NULL,
     name TEXT NOT NULL,
     setup TEXT NOT NULL,
-    mu_p REAL NOT NULL,
-    inertial REAL NOT NULL,
-    softness REAL NOT NULL,
-    bond REAL NOT NULL,
-    cohesion TEXT NOT NULL,
-    shear_dynamics TEXT NOT NULL,
-    particles INTEGER NOT NULL,
-    polydispersity REAL NOT NULL,
-    seed INTEGER NOT NULL,
-    strain REAL NOT NULL,
-    transient_strain REAL NOT NULL,
     steady INTEGER,
-    phi REAL, phi_err REAL,
-    mu REAL, mu_err REAL,
-    coordination REAL, coordination_err REAL,
-    sigma_yy REAL, sigma_yy_err REAL,
-    mean_stress REAL, mean_stress_err REAL,
-    granular_temperature REAL,
-    inertial_measured REAL, softness_measured REAL, bond_measured REAL,
-    wall_seconds REAL NOT NULL,
-    commit_id TEXT NOT NULL,
-    inserted_at TEXT NOT NULL DEFAULT (strftime('%Y-%m-%dT%H:%M:%SZ', 'now')),
-    spec_json TEXT NOT NULL,
-    result_json TEXT NOT NULL,
-    PRIMARY KEY (study, name)
-);
-CREATE TABLE IF NOT EXISTS cells (
-    study TEXT NOT NULL,
-    name TEXT NOT NULL,
-    law TEXT NOT NULL,
-    surface_tension REAL,
-    volume_nl REAL,
-    max_force REAL,
-    adhesive_stiffness REAL,
-    omega REAL NOT NULL,
-    gravity REAL NOT NULL,
-    mu_p REAL NOT NULL,
-    seed INTEGER NOT NULL,
-    duration REAL NOT NULL,
-    rupture_scaled REAL,
-    tension_scaled REAL,
-    mu REAL, mu_err REAL,
-    cohesion_scaled REAL, cohesion_scaled_err REAL,
-    cohesion_from_torque_scaled REAL,
-    torque_scaled REAL, torque_scaled_err REAL,
-    torque_macro_scaled REAL,
-    pressure_avg_scaled REAL,
     wall_seconds REAL,
     commit_id TEXT,
     inserted_at TEXT NOT NULL DEFAULT (strftime('%Y-%m-%dT%H:%M:%SZ', 'now')),
-    summary_json TEXT NOT NULL,
+    parameters_json TEXT NOT NULL,
+    results_json TEXT NOT NULL,
     PRIMARY KEY (study, name)
 );
+CREATE TABLE IF NOT EXISTS run_values (
+    study TEXT NOT NULL,
+    name TEXT NOT NULL,
+    kind TEXT NOT NULL CHECK (kind IN ('parameter', 'result')),
+    key TEXT NOT NULL,
+    value,
+    error REAL,
+    text TEXT,
+    PRIMARY KEY (study, name, kind, key)
+);
+CREATE INDEX IF NOT EXISTS run_values_by_key ON run_values (kind, key);
 ";
 
-/// The columns of `cells` that `export_cells_csv` writes, in order.
-const CELL_COLUMNS: [&str; 26] = [
-    "study",
-    "name",
-    "law",
-    "surface_tension",
-    "volume_nl",
-    "max_force",
-    "adhesive_stiffness",
-    "omega",
-    "gravity",
-    "mu_p",
-    "seed",
-    "duration",
-    "rupture_scaled",
-    "tension_scaled",
-    "mu",
-    "mu_err",
-    "cohesion_scaled",
-    "cohesion_scaled_err",
-    "cohesion_from_torque_scaled",
-    "torque_scaled",
-    "torque_scaled_err",
-    "torque_macro_scaled",
-    "pressure_avg_scaled",
-    "wall_seconds",
-    "commit_id",
-    "inserted_at",
+/// Where a column of a view comes from.
+#[derive(Clone, Copy)]
+enum Column {
+    /// A column of `runs`.
+    Run(&'static str),
+    /// A parameter's number.
+    Parameter(&'static str),
+    /// A parameter's name.
+    ParameterText(&'static str),
+    /// A parameter's number times a factor.
+    ParameterTimes(&'static str, f64),
+    /// A result's number (a mean).
+    Result(&'static str),
+    /// A result's standard error.
+    ResultError(&'static str),
+}
+
+use Column::{
+    Parameter as P, ParameterText as PT, ParameterTimes, Result as R, ResultError as RE, Run,
+};
+
+/// The view `points`: the shear-box points with the columns of schema version 2.
+const POINTS: &[(&str, Column)] = &[
+    ("study", Run("study")),
+    ("name", Run("name")),
+    ("setup", Run("setup")),
+    ("mu_p", P("mu_p")),
+    ("inertial", P("inertial")),
+    ("softness", P("softness")),
+    ("bond", P("bond")),
+    ("cohesion", PT("cohesion")),
+    ("shear_dynamics", PT("shear_dynamics")),
+    ("particles", P("particles")),
+    ("polydispersity", P("polydispersity")),
+    ("seed", P("seed")),
+    ("strain", P("strain")),
+    ("transient_strain", P("transient_strain")),
+    ("steady", Run("steady")),
+    ("phi", R("steady_state.volume_fraction")),
+    ("phi_err", RE("steady_state.volume_fraction")),
+    ("mu", R("steady_state.friction")),
+    ("mu_err", RE("steady_state.friction")),
+    ("coordination", R("steady_state.coordination")),
+    ("coordination_err", RE("steady_state.coordination")),
+    ("sigma_yy", R("steady_state.sigma_yy")),
+    ("sigma_yy_err", RE("steady_state.sigma_yy")),
+    ("mean_stress", R("steady_state.mean_stress")),
+    ("mean_stress_err", RE("steady_state.mean_stress")),
+    (
+        "granular_temperature",
+        R("steady_state.granular_temperature"),
+    ),
+    ("inertial_measured", R("steady_state.inertial_measured")),
+    ("softness_measured", R("steady_state.softness_measured")),
+    ("bond_measured", R("steady_state.bond_measured")),
+    ("wall_seconds", Run("wall_seconds")),
+    ("commit_id", Run("commit_id")),
+    ("inserted_at", Run("inserted_at")),
+    ("spec_json", Run("parameters_json")),
+    ("result_json", Run("results_json")),
 ];
 
-/// The columns `export_csv` writes, in order (the JSON documents are left out).
-const CSV_COLUMNS: [&str; 32] = [
-    "study",
-    "name",
-    "setup",
-    "mu_p",
-    "inertial",
-    "softness",
-    "bond",
-    "cohesion",
-    "shear_dynamics",
-    "particles",
-    "polydispersity",
-    "seed",
-    "strain",
-    "transient_strain",
-    "steady",
-    "phi",
-    "phi_err",
-    "mu",
-    "mu_err",
-    "coordination",
-    "coordination_err",
-    "sigma_yy",
-    "sigma_yy_err",
-    "mean_stress",
-    "mean_stress_err",
-    "granular_temperature",
-    "inertial_measured",
-    "softness_measured",
-    "bond_measured",
-    "wall_seconds",
-    "commit_id",
-    "inserted_at",
+/// The view `cells`: the split-bottom cells with the columns of schema version 2; the
+/// band's numbers in the scaled units of `setups::wet_study` (results `scaled.*`).
+const CELLS: &[(&str, Column)] = &[
+    ("study", Run("study")),
+    ("name", Run("name")),
+    ("law", PT("cohesion.law")),
+    ("surface_tension", P("cohesion.surface_tension")),
+    ("volume_nl", ParameterTimes("cohesion.volume", 1e12)),
+    ("max_force", P("cohesion.max_force")),
+    ("adhesive_stiffness", P("cohesion.stiffness")),
+    ("omega", P("omega")),
+    ("gravity", P("gravity")),
+    ("mu_p", P("friction")),
+    ("seed", P("seed")),
+    ("duration", P("duration")),
+    ("rupture_scaled", R("scaled.rupture")),
+    ("tension_scaled", R("scaled.tension")),
+    ("mu", R("scaled.mu")),
+    ("mu_err", RE("scaled.mu")),
+    ("cohesion_scaled", R("scaled.cohesion")),
+    ("cohesion_scaled_err", RE("scaled.cohesion")),
+    (
+        "cohesion_from_torque_scaled",
+        R("scaled.cohesion_from_torque"),
+    ),
+    ("torque_scaled", R("scaled.torque")),
+    ("torque_scaled_err", RE("scaled.torque")),
+    ("torque_macro_scaled", R("scaled.torque_macro")),
+    ("pressure_avg_scaled", R("scaled.pressure")),
+    ("wall_seconds", Run("wall_seconds")),
+    ("commit_id", Run("commit_id")),
+    ("inserted_at", Run("inserted_at")),
+    ("summary_json", Run("results_json")),
 ];
+
+/// `CREATE VIEW` of `view` over the runs of `setup` with `columns`.
+fn view_sql(view: &str, setup: &str, columns: &[(&str, Column)]) -> String {
+    let value = |column: &str, kind: &str, key: &str| {
+        format!(
+            "(SELECT v.{column} FROM run_values v WHERE v.study = r.study AND v.name = r.name \
+             AND v.kind = '{kind}' AND v.key = '{key}')"
+        )
+    };
+    let select: Vec<String> = columns
+        .iter()
+        .map(|(name, from)| {
+            let expr = match *from {
+                Run(c) => format!("r.{c}"),
+                P(k) => value("value", "parameter", k),
+                PT(k) => value("text", "parameter", k),
+                ParameterTimes(k, f) => format!("{f:e} * {}", value("value", "parameter", k)),
+                R(k) => value("value", "result", k),
+                RE(k) => value("error", "result", k),
+            };
+            format!("{expr} AS {name}")
+        })
+        .collect();
+    format!(
+        "CREATE VIEW IF NOT EXISTS {view} AS SELECT {} FROM runs r WHERE r.setup = '{setup}';",
+        select.join(", ")
+    )
+}
 
 /// Errors of the results database, naming the file.
 #[derive(Debug, thiserror::Error)]
@@ -188,6 +224,211 @@ pub enum DbError {
     },
 }
 
+/// One number or name of a run's parameters or results, as `run_values` stores it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Entry {
+    /// The dotted path of the key (`cohesion.volume`, `results.band[0].width`).
+    pub key: String,
+    /// The number (an integer or a real; `NULL` for a name or a number that is not
+    /// finite).
+    pub value: Sql,
+    /// The standard error of a mean.
+    pub error: Option<f64>,
+    /// The name, for a text value.
+    pub text: Option<String>,
+}
+
+/// Longest array whose elements are stored one by one (longer ones are data, kept in the
+/// JSON document only).
+const MAX_ARRAY: usize = 64;
+
+/// Every number and name of `v` as entries under `key` (see the module documentation): a
+/// mean with its error (an object with numbers `mean` and `error`) becomes one entry,
+/// booleans 0 or 1, arrays of at most [`MAX_ARRAY`] elements `key[k]`.
+pub fn flatten(v: &Value, key: &str, out: &mut Vec<Entry>) {
+    let entry = |value: Sql, error: Option<f64>, text: Option<String>| Entry {
+        key: key.to_string(),
+        value,
+        error,
+        text,
+    };
+    let real = |x: f64| {
+        if x.is_finite() {
+            Sql::Real(x)
+        } else {
+            Sql::Null
+        }
+    };
+    let join = |k: &str| {
+        if key.is_empty() {
+            k.to_string()
+        } else {
+            format!("{key}.{k}")
+        }
+    };
+    match v {
+        Value::Null => {}
+        Value::Bool(b) => out.push(entry(Sql::Integer(i64::from(*b)), None, None)),
+        Value::Number(n) => out.push(entry(
+            n.as_i64()
+                .map_or_else(|| real(n.as_f64().unwrap_or(f64::NAN)), Sql::Integer),
+            None,
+            None,
+        )),
+        Value::String(s) => out.push(entry(Sql::Null, None, Some(s.clone()))),
+        Value::Array(items) if items.len() <= MAX_ARRAY => {
+            for (k, item) in items.iter().enumerate() {
+                flatten(item, &format!("{key}[{k}]"), out);
+            }
+        }
+        Value::Array(_) => {}
+        Value::Object(map) => {
+            let estimate = map
+                .get("mean")
+                .and_then(Value::as_f64)
+                .zip(map.get("error").and_then(Value::as_f64));
+            if let Some((mean, error)) = estimate {
+                out.push(entry(real(mean), error.is_finite().then_some(error), None));
+            }
+            for (k, item) in map {
+                if estimate.is_some() && (k == "mean" || k == "error") {
+                    continue;
+                }
+                flatten(item, &join(k), out);
+            }
+        }
+    }
+}
+
+/// A finished run as the database stores it.
+struct Record {
+    setup: &'static str,
+    name: String,
+    parameters: Value,
+    results_json: String,
+    results: Value,
+    /// Results computed from the summary rather than read from it (`scaled.*`).
+    derived: Vec<Entry>,
+    steady: Option<bool>,
+    wall_seconds: Option<f64>,
+    commit: Option<String>,
+    /// When it was first stored (`None`: now).
+    inserted_at: Option<String>,
+}
+
+impl Record {
+    /// A shear-box point.
+    fn point(r: &PointResult) -> Record {
+        let results_json = serde_json::to_string(r).expect("results serialise");
+        Record {
+            setup: "shear-box",
+            name: r.name.clone(),
+            parameters: serde_json::to_value(&r.spec).expect("specs serialise"),
+            results: serde_json::from_str(&results_json).expect("results read back"),
+            results_json,
+            derived: Vec::new(),
+            steady: r.steady_state.as_ref().map(|s| s.steady),
+            wall_seconds: Some(r.wall_seconds),
+            commit: Some(r.commit.clone()),
+            inserted_at: None,
+        }
+    }
+
+    /// A split-bottom cell from the text of its `summary.json` (`origin` names it in
+    /// errors), with the band's numbers in the scaled units of `setups::wet_study` where
+    /// the run has a band rheology.
+    fn cell(name: &str, text: &str, origin: &str) -> Result<Record, String> {
+        use super::split_bottom::SplitBottomSpec;
+        #[derive(serde::Deserialize)]
+        struct Recorded {
+            spec: SplitBottomSpec,
+            #[serde(default)]
+            wall_seconds: Option<f64>,
+            #[serde(default)]
+            commit: Option<String>,
+        }
+        let rec: Recorded = serde_json::from_str(text)
+            .map_err(|e| format!("{origin} is not a split-bottom summary: {e}"))?;
+        let results: Value =
+            serde_json::from_str(text).map_err(|e| format!("{origin} is not JSON: {e}"))?;
+        let mut derived = Vec::new();
+        if let Ok(r) = super::wet_study::WetRun::from_summary(text, name, origin) {
+            let mut add = |key: &str, (value, error): (f64, Option<f64>)| {
+                flatten(&serde_json::json!(value), key, &mut derived);
+                if let (Some(e), Some(last)) = (error, derived.last_mut()) {
+                    last.error = e.is_finite().then_some(e);
+                }
+            };
+            add("scaled.rupture", (r.rupture, None));
+            add("scaled.tension", (r.tension, None));
+            add("scaled.mu", (r.mu.0, Some(r.mu.1)));
+            add("scaled.cohesion", (r.cohesion.0, Some(r.cohesion.1)));
+            add(
+                "scaled.cohesion_from_torque",
+                (r.cohesion_from_torque, None),
+            );
+            add("scaled.torque", (r.torque.0, Some(r.torque.1)));
+            add("scaled.torque_macro", (r.torque_macro, None));
+            add("scaled.pressure", (r.pressure, None));
+        }
+        Ok(Record {
+            setup: "split-bottom",
+            name: name.to_string(),
+            parameters: serde_json::to_value(&rec.spec).expect("specs serialise"),
+            results_json: text.to_string(),
+            results,
+            derived,
+            steady: None,
+            wall_seconds: rec.wall_seconds,
+            commit: rec.commit,
+            inserted_at: None,
+        })
+    }
+
+    /// Stores the record under `study` in the transaction `tx`, replacing an earlier run of
+    /// the same name with its values.
+    fn store(&self, tx: &Transaction<'_>, study: &str) -> rusqlite::Result<()> {
+        tx.execute(
+            "DELETE FROM run_values WHERE study = ?1 AND name = ?2",
+            params![study, self.name],
+        )?;
+        tx.execute(
+            "INSERT OR REPLACE INTO runs (study, name, setup, steady, wall_seconds, commit_id,
+                parameters_json, results_json, inserted_at)
+             VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8,
+                COALESCE(?9, strftime('%Y-%m-%dT%H:%M:%SZ', 'now')))",
+            params![
+                study,
+                self.name,
+                self.setup,
+                self.steady,
+                self.wall_seconds,
+                self.commit,
+                self.parameters.to_string(),
+                self.results_json,
+                self.inserted_at,
+            ],
+        )?;
+        let mut insert = tx.prepare_cached(
+            "INSERT OR REPLACE INTO run_values (study, name, kind, key, value, error, text)
+             VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7)",
+        )?;
+        let mut parameters = Vec::new();
+        flatten(&self.parameters, "", &mut parameters);
+        let mut results = Vec::new();
+        flatten(&self.results, "", &mut results);
+        results.extend(self.derived.iter().cloned());
+        for (kind, entries) in [("parameter", &parameters), ("result", &results)] {
+            for e in entries {
+                insert.execute(params![
+                    study, self.name, kind, e.key, e.value, e.error, e.text
+                ])?;
+            }
+        }
+        Ok(())
+    }
+}
+
 /// An open results database.
 pub struct ResultsDb {
     connection: Connection,
@@ -195,12 +436,14 @@ pub struct ResultsDb {
 }
 
 impl ResultsDb {
-    /// Opens (creating if needed) the database at `path`.
+    /// Opens (creating if needed) the database at `path`; a file of an older schema is
+    /// brought to the current one (its rows moved into `runs` and `run_values`).
     ///
-    /// The set-up (creating the file, switching it to WAL, creating the tables) runs under
-    /// an exclusive lock on `PATH.lock` beside it: SQLite answers a journal-mode change or a
-    /// schema write that meets another opener's with "database is locked" at once, without
-    /// its busy timeout, so concurrent first openers must take turns.
+    /// The set-up (creating the file, switching it to WAL, creating or converting the
+    /// tables) runs under an exclusive lock on `PATH.lock` beside it: SQLite answers a
+    /// journal-mode change or a schema write that meets another opener's with "database is
+    /// locked" at once, without its busy timeout, so concurrent first openers must take
+    /// turns.
     pub fn open(path: &Path) -> Result<ResultsDb, DbError> {
         let err = |source| DbError::Sqlite {
             path: path.to_path_buf(),
@@ -209,7 +452,7 @@ impl ResultsDb {
         let mut lock_file = path.as_os_str().to_owned();
         lock_file.push(".lock");
         let _setup = crate::io::lock::DirLock::acquire_file(Path::new(&lock_file))?;
-        let connection = Connection::open(path).map_err(err)?;
+        let mut connection = Connection::open(path).map_err(err)?;
         connection.busy_timeout(BUSY_TIMEOUT).map_err(err)?;
         // WAL lets readers go on while one process writes.
         let mode: String = connection
@@ -230,10 +473,11 @@ impl ResultsDb {
             });
         }
         if found < SCHEMA_VERSION {
-            connection.execute_batch(SCHEMA).map_err(err)?;
-            connection
-                .execute_batch(&format!("PRAGMA user_version = {SCHEMA_VERSION}"))
+            let tx = connection
+                .transaction_with_behavior(TransactionBehavior::Immediate)
                 .map_err(err)?;
+            upgrade(&tx, path)?;
+            tx.commit().map_err(err)?;
         }
         Ok(ResultsDb {
             connection,
@@ -248,92 +492,32 @@ impl ResultsDb {
         }
     }
 
-    /// Stores a finished point under `study`, replacing an earlier row of the same name.
-    pub fn insert(&mut self, study: &str, r: &PointResult) -> Result<(), DbError> {
+    /// Stores `record` under `study` in one transaction.
+    fn store(&mut self, study: &str, record: &Record) -> Result<(), DbError> {
         let path = self.path.clone();
         let err = move |source| DbError::Sqlite {
             path: path.clone(),
             source,
         };
-        let spec_json = serde_json::to_string(&r.spec).expect("specs serialise");
-        let result_json = serde_json::to_string(r).expect("results serialise");
-        let s = &r.spec;
-        let ss = r.steady_state.as_ref();
-        let est = |f: fn(&super::shear_box::SteadyState) -> crate::analysis::Estimate| ss.map(&f);
-        let (phi, mu, z, syy, p) = (
-            est(|x| x.volume_fraction),
-            est(|x| x.friction),
-            est(|x| x.coordination),
-            est(|x| x.sigma_yy),
-            est(|x| x.mean_stress),
-        );
         let tx = self
             .connection
             .transaction_with_behavior(TransactionBehavior::Immediate)
             .map_err(&err)?;
-        tx.execute(
-            "INSERT OR REPLACE INTO points (study, name, setup, mu_p, inertial, softness, bond,
-                cohesion, shear_dynamics, particles, polydispersity, seed, strain,
-                transient_strain, steady, phi, phi_err, mu, mu_err, coordination,
-                coordination_err, sigma_yy, sigma_yy_err, mean_stress, mean_stress_err,
-                granular_temperature, inertial_measured, softness_measured, bond_measured,
-                wall_seconds, commit_id, spec_json, result_json)
-             VALUES (?1, ?2, 'shear-box', ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12, ?13, ?14,
-                ?15, ?16, ?17, ?18, ?19, ?20, ?21, ?22, ?23, ?24, ?25, ?26, ?27, ?28, ?29,
-                ?30, ?31, ?32)",
-            params![
-                study,
-                r.name,
-                s.mu_p,
-                s.inertial,
-                s.softness,
-                s.bond,
-                format!("{:?}", s.cohesion).to_lowercase(),
-                s.shear_dynamics.name(),
-                s.particles as i64,
-                s.polydispersity,
-                s.seed as i64,
-                s.strain,
-                s.transient_strain,
-                ss.map(|x| x.steady),
-                phi.map(|e| e.mean),
-                phi.map(|e| e.error),
-                mu.map(|e| e.mean),
-                mu.map(|e| e.error),
-                z.map(|e| e.mean),
-                z.map(|e| e.error),
-                syy.map(|e| e.mean),
-                syy.map(|e| e.error),
-                p.map(|e| e.mean),
-                p.map(|e| e.error),
-                ss.map(|x| x.granular_temperature.mean),
-                ss.map(|x| x.inertial_measured),
-                ss.map(|x| x.softness_measured),
-                ss.map(|x| x.bond_measured),
-                r.wall_seconds,
-                r.commit,
-                spec_json,
-                result_json,
-            ],
-        )
-        .map_err(&err)?;
+        record.store(&tx, study).map_err(&err)?;
         tx.commit().map_err(err)
     }
 
+    /// Stores a finished shear-box point under `study`, replacing an earlier run of the
+    /// same name.
+    pub fn insert(&mut self, study: &str, r: &PointResult) -> Result<(), DbError> {
+        self.store(study, &Record::point(r))
+    }
+
     /// Stores the finished split-bottom cell `name` under `study` from its `summary.json`
-    /// (a run's, or its archived copy), replacing an earlier row of the same name. The
-    /// band's numbers, in the scaled units of `setups::wet_study`, are empty where the run
-    /// has no band rheology.
+    /// (a run's, or its archived copy), replacing an earlier run of the same name. The
+    /// band's numbers, in the scaled units of `setups::wet_study`, are left out where the
+    /// run has no band rheology.
     pub fn insert_cell(&mut self, study: &str, name: &str, summary: &Path) -> Result<(), DbError> {
-        use super::split_bottom::{Cohesion, SplitBottomSpec};
-        #[derive(serde::Deserialize)]
-        struct Recorded {
-            spec: SplitBottomSpec,
-            #[serde(default)]
-            wall_seconds: Option<f64>,
-            #[serde(default)]
-            commit: Option<String>,
-        }
         let corrupt = |reason: String| DbError::Corrupt {
             path: self.path.clone(),
             name: name.into(),
@@ -341,101 +525,37 @@ impl ResultsDb {
         };
         let text = std::fs::read_to_string(summary)
             .map_err(|e| corrupt(format!("cannot read {}: {e}", summary.display())))?;
-        let rec: Recorded = serde_json::from_str(&text).map_err(|e| {
-            corrupt(format!(
-                "{} is not a split-bottom summary: {e}",
-                summary.display()
-            ))
-        })?;
-        let run = super::wet_study::WetRun::read_summary(summary, name).ok();
-        let (law, tension, volume, force, stiffness) = match rec.spec.cohesion {
-            Cohesion::Dry => ("dry", None, None, None, None),
-            Cohesion::Willett {
-                surface_tension,
-                volume,
-                ..
-            } => (
-                "willett",
-                Some(surface_tension),
-                Some(volume * 1e12),
-                None,
-                None,
-            ),
-            Cohesion::Linear {
-                max_force,
-                stiffness,
-            } => ("linear", None, None, Some(max_force), Some(stiffness)),
-        };
-        let r = run.as_ref();
-        let s = &rec.spec;
-        let path = self.path.clone();
-        let err = move |source| DbError::Sqlite {
-            path: path.clone(),
-            source,
-        };
-        let tx = self
-            .connection
-            .transaction_with_behavior(TransactionBehavior::Immediate)
-            .map_err(&err)?;
-        tx.execute(
-            "INSERT OR REPLACE INTO cells (study, name, law, surface_tension, volume_nl,
-                max_force, adhesive_stiffness, omega, gravity, mu_p, seed, duration,
-                rupture_scaled, tension_scaled, mu, mu_err, cohesion_scaled,
-                cohesion_scaled_err, cohesion_from_torque_scaled, torque_scaled,
-                torque_scaled_err, torque_macro_scaled, pressure_avg_scaled, wall_seconds,
-                commit_id, summary_json)
-             VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12, ?13, ?14, ?15, ?16,
-                ?17, ?18, ?19, ?20, ?21, ?22, ?23, ?24, ?25, ?26)",
-            params![
-                study,
-                name,
-                law,
-                tension,
-                volume,
-                force,
-                stiffness,
-                s.omega,
-                s.gravity,
-                s.friction,
-                s.seed as i64,
-                s.duration,
-                r.map(|r| r.rupture),
-                r.map(|r| r.tension),
-                r.map(|r| r.mu.0),
-                r.map(|r| r.mu.1),
-                r.map(|r| r.cohesion.0),
-                r.map(|r| r.cohesion.1),
-                r.map(|r| r.cohesion_from_torque),
-                r.map(|r| r.torque.0),
-                r.map(|r| r.torque.1),
-                r.map(|r| r.torque_macro),
-                r.map(|r| r.pressure),
-                rec.wall_seconds,
-                rec.commit,
-                text,
-            ],
-        )
-        .map_err(&err)?;
-        tx.commit().map_err(err)
+        let record = Record::cell(name, &text, &summary.display().to_string()).map_err(corrupt)?;
+        self.store(study, &record)
     }
 
-    /// Number of stored split-bottom cells of `study` (of every study with `None`).
-    pub fn count_cells(&self, study: Option<&str>) -> Result<u64, DbError> {
+    /// Number of stored runs of `setup` in `study` (in every study with `None`).
+    fn count_of(&self, setup: &str, study: Option<&str>) -> Result<u64, DbError> {
         self.connection
             .query_row(
-                "SELECT count(*) FROM cells WHERE ?1 IS NULL OR study = ?1",
-                params![study],
+                "SELECT count(*) FROM runs WHERE setup = ?1 AND (?2 IS NULL OR study = ?2)",
+                params![setup, study],
                 |r| r.get::<_, i64>(0),
             )
             .map(|n| n as u64)
             .map_err(self.err())
     }
 
-    /// The studies with stored points or cells, in name order.
+    /// Number of stored split-bottom cells of `study` (of every study with `None`).
+    pub fn count_cells(&self, study: Option<&str>) -> Result<u64, DbError> {
+        self.count_of("split-bottom", study)
+    }
+
+    /// Number of stored shear-box points of `study` (of every study with `None`).
+    pub fn count(&self, study: Option<&str>) -> Result<u64, DbError> {
+        self.count_of("shear-box", study)
+    }
+
+    /// The studies with stored runs, in name order.
     pub fn studies(&self) -> Result<Vec<String>, DbError> {
         let mut q = self
             .connection
-            .prepare("SELECT study FROM points UNION SELECT study FROM cells ORDER BY study")
+            .prepare("SELECT DISTINCT study FROM runs ORDER BY study")
             .map_err(self.err())?;
         let rows = q
             .query_map([], |r| r.get::<_, String>(0))
@@ -443,12 +563,13 @@ impl ResultsDb {
         rows.collect::<Result<Vec<_>, _>>().map_err(self.err())
     }
 
-    /// The stored result of point `name` in `study`, if any.
+    /// The stored result of shear-box point `name` in `study`, if any.
     pub fn get(&self, study: &str, name: &str) -> Result<Option<PointResult>, DbError> {
         let json: Option<String> = self
             .connection
             .query_row(
-                "SELECT result_json FROM points WHERE study = ?1 AND name = ?2",
+                "SELECT results_json FROM runs
+                 WHERE setup = 'shear-box' AND study = ?1 AND name = ?2",
                 params![study, name],
                 |r| r.get(0),
             )
@@ -464,13 +585,14 @@ impl ResultsDb {
         .transpose()
     }
 
-    /// Every stored result of `study` (every study with `None`), ordered by study and name.
+    /// Every stored shear-box result of `study` (every study with `None`), ordered by
+    /// study and name.
     pub fn results(&self, study: Option<&str>) -> Result<Vec<(String, PointResult)>, DbError> {
         let mut q = self
             .connection
             .prepare(
-                "SELECT study, name, result_json FROM points
-                 WHERE ?1 IS NULL OR study = ?1 ORDER BY study, name",
+                "SELECT study, name, results_json FROM runs
+                 WHERE setup = 'shear-box' AND (?1 IS NULL OR study = ?1) ORDER BY study, name",
             )
             .map_err(self.err())?;
         let rows = q
@@ -495,28 +617,31 @@ impl ResultsDb {
         Ok(out)
     }
 
-    /// Number of stored points of `study` (of every study with `None`).
-    pub fn count(&self, study: Option<&str>) -> Result<u64, DbError> {
-        self.connection
-            .query_row(
-                "SELECT count(*) FROM points WHERE ?1 IS NULL OR study = ?1",
-                params![study],
-                |r| r.get::<_, i64>(0),
-            )
-            .map(|n| n as u64)
-            .map_err(self.err())
-    }
-
-    /// The table of `study` (every study with `None`) as CSV: the columns of the `points`
-    /// table without the JSON documents, empty fields for missing values.
+    /// The shear-box points of `study` (every study with `None`) as CSV: the columns of
+    /// the view `points` without the JSON documents, empty fields for missing values.
     pub fn export_csv(&self, study: Option<&str>) -> Result<String, DbError> {
-        self.table_csv("points", &CSV_COLUMNS, study)
+        self.table_csv("points", &columns(POINTS, "spec_json"), study)
     }
 
     /// The split-bottom cells of `study` (every study with `None`) as CSV: the columns of
-    /// the `cells` table without the summary document.
+    /// the view `cells` without the summary document.
     pub fn export_cells_csv(&self, study: Option<&str>) -> Result<String, DbError> {
-        self.table_csv("cells", &CELL_COLUMNS, study)
+        self.table_csv("cells", &columns(CELLS, "summary_json"), study)
+    }
+
+    /// Every stored number and name of the runs of `study` (every study with `None`), of
+    /// any set-up, as CSV in long form: `study, name, setup, kind, key, value, error,
+    /// text`, one row per key.
+    pub fn export_values_csv(&self, study: Option<&str>) -> Result<String, DbError> {
+        self.query_csv(
+            "SELECT v.study, v.name, r.setup, v.kind, v.key, v.value, v.error, v.text
+             FROM run_values v JOIN runs r ON r.study = v.study AND r.name = v.name
+             WHERE ?1 IS NULL OR v.study = ?1 ORDER BY v.study, v.name, v.kind, v.key",
+            &[
+                "study", "name", "setup", "kind", "key", "value", "error", "text",
+            ],
+            study,
+        )
     }
 
     /// The `columns` of `table`'s rows of `study` as CSV.
@@ -530,11 +655,21 @@ impl ResultsDb {
             "SELECT {} FROM {table} WHERE ?1 IS NULL OR study = ?1 ORDER BY study, name",
             columns.join(", ")
         );
-        let mut q = self.connection.prepare(&sql).map_err(self.err())?;
+        self.query_csv(&sql, columns, study)
+    }
+
+    /// The rows of `sql` (with `study` as its one parameter) as CSV under `header`.
+    fn query_csv(
+        &self,
+        sql: &str,
+        header: &[&str],
+        study: Option<&str>,
+    ) -> Result<String, DbError> {
+        let mut q = self.connection.prepare(sql).map_err(self.err())?;
         let mut rows = q.query(params![study]).map_err(self.err())?;
-        let mut s = columns.join(",") + "\n";
+        let mut s = header.join(",") + "\n";
         while let Some(row) = rows.next().map_err(self.err())? {
-            for k in 0..columns.len() {
+            for k in 0..header.len() {
                 if k > 0 {
                     s.push(',');
                 }
@@ -562,6 +697,75 @@ impl ResultsDb {
         }
         Ok(s)
     }
+}
+
+/// The names of `view`'s columns, those from `first_document` on left out.
+fn columns(view: &[(&'static str, Column)], first_document: &str) -> Vec<&'static str> {
+    view.iter()
+        .map(|(name, _)| *name)
+        .take_while(|name| *name != first_document)
+        .collect()
+}
+
+/// Whether the file has a table (not a view) named `name`.
+fn has_table(tx: &Transaction<'_>, name: &str) -> rusqlite::Result<bool> {
+    tx.query_row(
+        "SELECT count(*) FROM sqlite_master WHERE type = 'table' AND name = ?1",
+        params![name],
+        |r| r.get::<_, i64>(0),
+    )
+    .map(|n| n > 0)
+}
+
+/// Brings a file of schema version 0 (new), 1 or 2 to version 3 in the transaction `tx`:
+/// the tables and views, and the rows of the former tables `points` and `cells` moved into
+/// `runs` and `run_values` (a point whose result no longer reads is refused by name).
+fn upgrade(tx: &Transaction<'_>, path: &Path) -> Result<(), DbError> {
+    let err = |source| DbError::Sqlite {
+        path: path.to_path_buf(),
+        source,
+    };
+    tx.execute_batch(TABLES).map_err(err)?;
+    let corrupt = |name: &str, reason: String| DbError::Corrupt {
+        path: path.to_path_buf(),
+        name: name.to_string(),
+        reason,
+    };
+    for (table, document) in [("points", "result_json"), ("cells", "summary_json")] {
+        if !has_table(tx, table).map_err(err)? {
+            continue;
+        }
+        let rows: Vec<(String, String, String, Option<String>)> = {
+            let mut q = tx
+                .prepare(&format!(
+                    "SELECT study, name, {document}, inserted_at FROM {table}"
+                ))
+                .map_err(err)?;
+            q.query_map([], |r| Ok((r.get(0)?, r.get(1)?, r.get(2)?, r.get(3)?)))
+                .map_err(err)?
+                .collect::<Result<_, _>>()
+                .map_err(err)?
+        };
+        for (study, name, json, inserted_at) in rows {
+            let mut record = if table == "points" {
+                let point: PointResult =
+                    serde_json::from_str(&json).map_err(|e| corrupt(&name, e.to_string()))?;
+                Record::point(&point)
+            } else {
+                Record::cell(&name, &json, "its stored summary").map_err(|e| corrupt(&name, e))?
+            };
+            record.inserted_at = inserted_at;
+            record.store(tx, &study).map_err(err)?;
+        }
+        tx.execute_batch(&format!("DROP TABLE {table}"))
+            .map_err(err)?;
+    }
+    tx.execute_batch(&view_sql("points", "shear-box", POINTS))
+        .map_err(err)?;
+    tx.execute_batch(&view_sql("cells", "split-bottom", CELLS))
+        .map_err(err)?;
+    tx.execute_batch(&format!("PRAGMA user_version = {SCHEMA_VERSION}"))
+        .map_err(err)
 }
 
 #[cfg(test)]
@@ -654,6 +858,159 @@ mod tests {
         assert!(e.to_string().contains("Cargo.toml"), "{e}");
         drop(db);
         let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    /// Every number and name of a run is a row of `run_values`: a parameter of either
+    /// set-up selects its runs in SQL, a mean carries its error, counts stay integers.
+    #[test]
+    fn every_value_of_either_set_up_is_selectable() {
+        let dir = temp("values");
+        let mut db = ResultsDb::open(&dir.join("results.sqlite")).expect("open");
+        db.insert("s", &point("p1", 0.25)).expect("insert");
+        let summary = Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("../../validation/runs-split-bottom-fields/wet-g0.02-v75/summary.json");
+        db.insert_cell("s", "v75", &summary).expect("insert");
+        let value = |kind: &str, key: &str| -> (Option<f64>, Option<String>) {
+            db.connection
+                .query_row(
+                    "SELECT value, text FROM run_values WHERE kind = ?1 AND key = ?2",
+                    params![kind, key],
+                    |r| Ok((r.get(0)?, r.get(1)?)),
+                )
+                .expect("one row")
+        };
+        assert_eq!(value("parameter", "mu_p").0, Some(0.25));
+        assert_eq!(
+            value("parameter", "shear_dynamics").1.as_deref(),
+            Some("affine-drag")
+        );
+        assert_eq!(value("parameter", "omega").0, Some(0.5));
+        assert_eq!(
+            value("parameter", "cohesion.law").1.as_deref(),
+            Some("willett")
+        );
+        let particles: i64 = db
+            .connection
+            .query_row(
+                "SELECT value FROM run_values WHERE name = 'p1' AND key = 'particles'",
+                [],
+                |r| r.get(0),
+            )
+            .expect("stored as an integer");
+        assert_eq!(particles, 4096);
+        let (c, c_err): (f64, f64) = db
+            .connection
+            .query_row(
+                "SELECT value, error FROM run_values WHERE key = 'scaled.cohesion'",
+                [],
+                |r| Ok((r.get(0)?, r.get(1)?)),
+            )
+            .expect("the band's c*");
+        assert!(
+            (c - 0.403).abs() < 0.001 && c_err > 0.0 && c_err < 0.1,
+            "{c} ± {c_err}"
+        );
+        let csv = db.export_values_csv(Some("s")).expect("csv");
+        assert!(csv.starts_with("study,name,setup,kind,key,value,error,text\n"));
+        assert!(
+            csv.contains("\ns,p1,shear-box,parameter,mu_p,0.25,,\n"),
+            "{csv}"
+        );
+        drop(db);
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    /// A file of schema version 2 (tables `points` and `cells`, here with the columns the
+    /// upgrade reads) opens as version 3 with its rows in `runs`, their insertion times
+    /// kept, and the same columns in the views `points` and `cells`.
+    #[test]
+    fn a_version_2_file_is_upgraded_in_place() {
+        let dir = temp("upgrade");
+        let file = dir.join("results.sqlite");
+        let summary = Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("../../validation/runs-split-bottom-fields/wet-g0.02-v75/summary.json");
+        let c = Connection::open(&file).expect("raw");
+        c.execute_batch(
+            "CREATE TABLE points (study TEXT, name TEXT, result_json TEXT, inserted_at TEXT);
+             CREATE TABLE cells (study TEXT, name TEXT, summary_json TEXT, inserted_at TEXT);
+             PRAGMA user_version = 2;",
+        )
+        .expect("version 2");
+        let old = serde_json::to_string(&point("p1", 0.3)).expect("json");
+        c.execute(
+            "INSERT INTO points VALUES ('a', 'p1', ?1, '2025-01-02T03:04:05Z')",
+            params![old],
+        )
+        .expect("row");
+        let text = std::fs::read_to_string(&summary).expect("summary");
+        c.execute(
+            "INSERT INTO cells VALUES ('wet', 'v75', ?1, '2025-06-07T08:09:10Z')",
+            params![text],
+        )
+        .expect("row");
+        drop(c);
+        let db = ResultsDb::open(&file).expect("upgrades");
+        assert_eq!(
+            (db.count(None).expect("n"), db.count_cells(None).expect("n")),
+            (1, 1)
+        );
+        assert_eq!(db.studies().expect("studies"), ["a", "wet"]);
+        assert_eq!(
+            db.get("a", "p1").expect("get").expect("stored").spec.mu_p,
+            0.3
+        );
+        let csv = db.export_csv(None).expect("csv");
+        let row = csv.lines().nth(1).expect("a row");
+        assert!(
+            row.starts_with("a,p1,shear-box,0.3,0.02,0.01,0,none,affine-drag,4096,3,1,"),
+            "{row}"
+        );
+        assert!(row.ends_with(",12.5,abc,2025-01-02T03:04:05Z"), "{row}");
+        let cells = db.export_cells_csv(None).expect("csv");
+        assert!(
+            cells
+                .lines()
+                .nth(1)
+                .expect("a row")
+                .starts_with("wet,v75,willett,0.02,75")
+        );
+        assert!(cells.contains("2025-06-07T08:09:10Z"));
+        let version: i64 = db
+            .connection
+            .query_row("PRAGMA user_version", [], |r| r.get(0))
+            .expect("version");
+        assert_eq!(version, SCHEMA_VERSION);
+        drop(db);
+        // Opening again changes nothing.
+        let db = ResultsDb::open(&file).expect("reopens");
+        assert_eq!(db.export_csv(None).expect("csv"), csv);
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    #[test]
+    fn flatten_folds_estimates_and_keeps_integers() {
+        let v = serde_json::json!({
+            "a": {"mean": 1.5, "error": 0.25, "samples": 9},
+            "b": [true, "x", null],
+            "c": {"d": f64::MAX},
+            "long": vec![0; MAX_ARRAY + 1],
+        });
+        let mut out = Vec::new();
+        flatten(&v, "", &mut out);
+        let got: Vec<(String, Sql, Option<f64>, Option<String>)> = out
+            .into_iter()
+            .map(|e| (e.key, e.value, e.error, e.text))
+            .collect();
+        assert_eq!(
+            got,
+            vec![
+                ("a".into(), Sql::Real(1.5), Some(0.25), None),
+                ("a.samples".into(), Sql::Integer(9), None, None),
+                ("b[0]".into(), Sql::Integer(1), None, None),
+                ("b[1]".into(), Sql::Null, None, Some("x".into())),
+                ("c.d".into(), Sql::Real(f64::MAX), None, None),
+            ]
+        );
     }
 
     #[test]

@@ -19,6 +19,9 @@ use crate::domain::ShearDynamics;
 use crate::measure::Observables;
 use crate::scenario::spec::*;
 use crate::scenario::{ScenarioError, invalid};
+use crate::setups::schema::{
+    Field, Range, SetUpSchema, Values, check_table, given, overlay, table_of,
+};
 use serde::{Deserialize, Serialize};
 use std::f64::consts::PI;
 
@@ -155,6 +158,177 @@ fn default_cg_width() -> f64 {
     1.0
 }
 
+impl SetUpSchema for ShearBoxSpec {
+    const NAME: &'static str = "shear-box";
+    const SUMMARY: &'static str = "Stress-controlled simple shear box at given (μ_p, I, p*, Bo): \
+        steady-state φ, μ, Z, σ (Shi et al. 2020).";
+    const FIELDS: &'static [Field] = &[
+        Field::number(
+            "mu_p",
+            "",
+            "Particle friction μ_p",
+            Range::Closed(0.0, 10.0),
+        )
+        .required(),
+        Field::number(
+            "inertial",
+            "",
+            "Inertial number I = γ̇ d_p / sqrt(p/ρ_p)",
+            Range::AboveUpTo(0.0, 2.0),
+        )
+        .required(),
+        Field::number(
+            "softness",
+            "",
+            "Softness p* = p d_p / k_n",
+            Range::AboveUpTo(0.0, 0.2),
+        )
+        .required(),
+        Field::number(
+            "bond",
+            "",
+            "Bond number Bo = f_a^max / (p d_p²)",
+            Range::Closed(0.0, 100.0),
+        ),
+        Field::adhesive_law(
+            "cohesion",
+            "Adhesive law at the point's strength (f_a^max = Bo p d_p², k_c = k_n), needed when Bo > 0",
+        ),
+        Field::number(
+            "range",
+            "",
+            "Rupture distance of the irreversible laws S_c/d_p",
+            Range::AboveUpTo(0.0, 2.0),
+        ),
+        Field::number("diameter", "m", "Mean diameter d_p", Range::Above(0.0)),
+        Field::number("density", "kg/m³", "Density ρ_p", Range::Above(0.0)),
+        Field::number(
+            "stiffness",
+            "N/m",
+            "Normal stiffness k_n",
+            Range::Above(0.0),
+        ),
+        Field::number(
+            "restitution",
+            "",
+            "Restitution coefficient e",
+            Range::AboveUpTo(0.0, 1.0),
+        ),
+        Field::number(
+            "polydispersity",
+            "",
+            "Polydispersity w = r_max/r_min",
+            Range::Closed(1.0, 20.0),
+        ),
+        Field::count(
+            "particles",
+            "Number of particles N",
+            Range::Closed(16.0, 1e7),
+        ),
+        Field::number(
+            "strain",
+            "",
+            "Total shear strain",
+            Range::AboveUpTo(0.0, 1e6),
+        ),
+        Field::number(
+            "transient_strain",
+            "",
+            "Strain before averaging",
+            Range::AtLeast(0.0),
+        )
+        .note(", below the total strain"),
+        Field::number(
+            "control_time",
+            "",
+            "Relaxation time of the σ_yy control in units of t_k = sqrt(ρ_p d_p³/k_n)",
+            Range::AboveUpTo(0.0, 1e6),
+        ),
+        Field::count("seed", "Seed of the random packing", Range::AtLeast(0.0))
+            .note(" (at most 2⁶³ − 1, the range a TOML file holds)"),
+        Field::number(
+            "rows_per_strain",
+            "",
+            "Time-series rows per unit strain",
+            Range::AboveUpTo(0.0, 1e6),
+        ),
+        Field::count(
+            "snapshots",
+            "VTK snapshots over the run",
+            Range::AtLeast(0.0),
+        ),
+        Field::count(
+            "checkpoints",
+            "Checkpoints over the run",
+            Range::AtLeast(0.0),
+        ),
+        Field::choice(
+            "shear_dynamics",
+            "Shear dynamics (docs/model.md §4.3–4.5; peculiar-contacts: lab dynamics, contacts \
+             without the mean-flow difference; affine-drag: the source papers' code)",
+            &["lab", "peculiar-contacts", "affine-drag"],
+        ),
+        Field::count(
+            "cg_slabs",
+            "Slabs along y of the coarse-grained fields averaged over the steady window \
+             (fields.csv, fields.vti)",
+            Range::Closed(0.0, 1e5),
+        )
+        .note("; 0 for none"),
+        Field::choice("cg_kernel", "Kernel of the fields", &["lucy", "gaussian"]),
+        Field::number(
+            "cg_width",
+            "",
+            "Kernel width of the fields in mean diameters",
+            Range::AboveUpTo(0.0, 10.0),
+        ),
+        Field::switch(
+            "cg_records",
+            "Also store the fields' samples (particles, contacts, box under fields/) for \
+             `rheodem cg` to coarse-grain the run again; needs cg_slabs > 0",
+        ),
+    ];
+
+    fn defaults() -> toml::Table {
+        // The defaults are serde's: a spec with only the required controls given.
+        let controls: toml::Table = [("mu_p", 0.5), ("inertial", 0.1), ("softness", 0.01)]
+            .into_iter()
+            .map(|(k, v)| (k.to_string(), toml::Value::Float(v)))
+            .collect();
+        let required = ShearBoxSpec::from_table(controls).expect("the three controls make a spec");
+        let mut t = table_of(&required);
+        for f in Self::FIELDS.iter().filter(|f| f.required) {
+            t.remove(f.key);
+        }
+        t
+    }
+
+    /// The config file (`base`) must be valid on its own: an option overriding a bad value
+    /// does not hide it (its values are checked, completed by the options only where it
+    /// has none).
+    fn from_values(mut base: toml::Table, values: &Values) -> Result<ShearBoxSpec, ScenarioError> {
+        if given(values, "shear_dynamics").is_some() {
+            // The parameter replaces the older spelling of a config file.
+            base.remove("peculiar_contacts");
+        }
+        let parse = |t: toml::Table| {
+            ShearBoxSpec::from_table(t).map_err(|e| ScenarioError::Parse(e.to_string()))
+        };
+        let options = overlay(Self::FIELDS, toml::Table::new(), values)?;
+        if !base.is_empty() {
+            let mut probe = base.clone();
+            for (k, v) in &options {
+                probe.entry(k.clone()).or_insert_with(|| v.clone());
+            }
+            parse(probe)?.derive()?;
+        }
+        base.extend(options);
+        let spec = parse(base)?;
+        spec.derive()?;
+        Ok(spec)
+    }
+}
+
 /// SI values derived from a [`ShearBoxSpec`].
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Derived {
@@ -191,16 +365,6 @@ fn mean_radius_cubed(d: f64, w: f64) -> f64 {
     }
 }
 
-fn in_range(key: &str, v: f64, lo: f64, hi: f64, open_lo: bool) -> Result<f64, ScenarioError> {
-    let ok = v.is_finite() && v <= hi && if open_lo { v > lo } else { v >= lo };
-    if ok {
-        Ok(v)
-    } else {
-        let l = if open_lo { "(" } else { "[" };
-        Err(invalid(key, v, format!("must lie in {l}{lo}, {hi}]")))
-    }
-}
-
 impl ShearBoxSpec {
     /// A spec from a TOML table (a config file, a sweep point, command-line overrides);
     /// the error names the offending key.
@@ -231,39 +395,14 @@ impl ShearBoxSpec {
     /// # Ok::<(), Box<dyn std::error::Error>>(())
     /// ```
     pub fn derive(&self) -> Result<Derived, ScenarioError> {
-        in_range("mu_p", self.mu_p, 0.0, 10.0, false)?;
-        let i = in_range("inertial", self.inertial, 0.0, 2.0, true)?;
-        let ps = in_range("softness", self.softness, 0.0, 0.2, true)?;
-        let bo = in_range("bond", self.bond, 0.0, 100.0, false)?;
-        let range = in_range("range", self.range, 0.0, 2.0, true)?;
-        let d = in_range("diameter", self.diameter, 0.0, f64::MAX, true)?;
-        let rho = in_range("density", self.density, 0.0, f64::MAX, true)?;
-        let k = in_range("stiffness", self.stiffness, 0.0, f64::MAX, true)?;
-        in_range("restitution", self.restitution, 0.0, 1.0, true)?;
-        in_range("polydispersity", self.polydispersity, 1.0, 20.0, false)?;
-        if self.particles < 16 || self.particles > 10_000_000 {
-            return Err(invalid(
-                "particles",
-                self.particles,
-                "must lie in [16, 10000000]",
-            ));
-        }
-        let strain = in_range("strain", self.strain, 0.0, 1e6, true)?;
-        if !(self.transient_strain >= 0.0 && self.transient_strain < strain) {
+        check_table(Self::FIELDS, &table_of(self))?;
+        let (i, ps, bo, range) = (self.inertial, self.softness, self.bond, self.range);
+        let (d, rho, k, strain) = (self.diameter, self.density, self.stiffness, self.strain);
+        if self.transient_strain >= strain {
             return Err(invalid(
                 "transient_strain",
                 self.transient_strain,
                 format!("must lie in [0, strain = {strain})"),
-            ));
-        }
-        in_range("control_time", self.control_time, 0.0, 1e6, true)?;
-        in_range("rows_per_strain", self.rows_per_strain, 0.0, 1e6, true)?;
-        in_range("cg_width", self.cg_width, 0.0, 10.0, true)?;
-        if self.cg_slabs > 100_000 {
-            return Err(invalid(
-                "cg_slabs",
-                self.cg_slabs,
-                "must lie in [0, 100000]",
             ));
         }
         if self.cg_records && self.cg_slabs == 0 {

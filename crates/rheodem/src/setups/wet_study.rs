@@ -172,11 +172,16 @@ impl WetRun {
     /// Reads the run `name` from its summary `file` (a run's `summary.json`, or its copy in
     /// a study's archive).
     pub fn read_summary(file: &Path, name: &str) -> Result<WetRun, String> {
-        let name = name.to_string();
         let text = std::fs::read_to_string(file)
             .map_err(|e| format!("cannot read {}: {e}", file.display()))?;
-        let s: RunSummary = serde_json::from_str(&text)
-            .map_err(|e| format!("{} is not a split-bottom summary: {e}", file.display()))?;
+        WetRun::from_summary(&text, name, &file.display().to_string())
+    }
+
+    /// [`WetRun::read_summary`] from the text of a summary; `origin` names it in errors.
+    pub fn from_summary(text: &str, name: &str, origin: &str) -> Result<WetRun, String> {
+        let name = name.to_string();
+        let s: RunSummary = serde_json::from_str(text)
+            .map_err(|e| format!("{origin} is not a split-bottom summary: {e}"))?;
         if let Some(stage) = s.stage.as_deref().filter(|&stage| stage != "done") {
             return Err(format!(
                 "{name}: not finished (stage {stage}; its summary is a running one)"

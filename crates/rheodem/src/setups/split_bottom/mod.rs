@@ -21,13 +21,15 @@
 //!
 //! The run goes through the staged run driver ([`crate::driver`]), which owns its
 //! directory, lock, checkpoints, resumption and summary; this module supplies the stages.
-//! Its files: `spec` (the keys, their checks, the geometry and the filling), `state` (the
+//! Its files: `spec` (the keys, their checks, the geometry and the filling), `schema` (the
+//! parameters, declared once, and how given values become a spec), `state` (the
 //! checkpointed state and the cell's measurements), `stages` (fill, settle, shear and the
 //! operations of each step), `outputs` (time series, profiles, figures, summary) and
 //! `fields` (the coarse-grained fields and the shear band's rheology).
 
 pub mod fields;
 mod outputs;
+mod schema;
 mod spec;
 mod stages;
 mod state;

@@ -8,6 +8,7 @@ use crate::generate::Rng;
 use crate::memory::{self, Bytes};
 use crate::neighbor::min_wedge_angle;
 use crate::scenario::{ScenarioError, invalid, law_error};
+use crate::setups::schema::{SetUpSchema, check_table, table_of};
 use glam::{DMat3, DVec3};
 use rand::RngExt;
 use rustc_hash::FxHashMap;
@@ -231,22 +232,6 @@ pub struct Groups {
     pub dt: f64,
 }
 
-fn positive(key: &str, v: f64) -> Result<f64, ScenarioError> {
-    if v > 0.0 && v.is_finite() {
-        Ok(v)
-    } else {
-        Err(invalid(key, v, "must be a positive number"))
-    }
-}
-
-fn non_negative(key: &str, v: f64) -> Result<f64, ScenarioError> {
-    if v >= 0.0 && v.is_finite() {
-        Ok(v)
-    } else {
-        Err(invalid(key, v, "must be zero or positive"))
-    }
-}
-
 impl SplitBottomSpec {
     /// Parses a spec from TOML (keys as the fields; omitted keys take the defaults).
     pub fn from_toml(text: &str) -> Result<SplitBottomSpec, ScenarioError> {
@@ -371,49 +356,20 @@ impl SplitBottomSpec {
 
     /// Checks every value and resolves the geometry; errors name the key and the range.
     pub fn geometry(&self) -> Result<Geometry, ScenarioError> {
-        let scale = positive("scale", self.scale)?;
-        let d = positive("diameter", self.diameter)?;
-        if !(self.w >= 1.0 && self.w.is_finite()) {
-            return Err(invalid("w", self.w, "must be at least 1 (d_max / d_min)"));
-        }
-        positive("density", self.density)?;
-        positive("stiffness", self.stiffness)?;
-        non_negative("damping", self.damping)?;
-        non_negative("friction", self.friction)?;
-        non_negative("stiffness_ratio", self.stiffness_ratio)?;
-        non_negative("damping_ratio", self.damping_ratio)?;
-        non_negative("omega", self.omega)?;
-        non_negative("gravity", self.gravity)?;
-        positive("settle_damping", self.settle_damping)?;
-        positive("skin", self.skin)?;
-        if !(self.wall_shell.is_finite() && (0.0..=5.0).contains(&self.wall_shell)) {
-            return Err(invalid(
-                "wall_shell",
-                self.wall_shell,
-                "must lie in [0, 5] particle diameters",
-            ));
-        }
-        positive("cg_width", self.cg_width)?;
-        positive("cg_spacing", self.cg_spacing)?;
-        non_negative("cg_every", self.cg_every)?;
-        positive("settle_kinetic_ratio", self.settle_kinetic_ratio)?;
-        positive("settle_max_time", self.settle_max_time)?;
-        positive("duration", self.duration)?;
+        check_table(Self::FIELDS, &table_of(self))?;
+        let (scale, d) = (self.scale, self.diameter);
         self.check_cohesion(d)?;
-        if !(self.average_from >= 0.0 && self.average_from < self.duration) {
+        if self.average_from >= self.duration {
             return Err(invalid(
                 "average_from",
                 self.average_from,
                 format!("must be in [0, duration = {})", self.duration),
             ));
         }
-        if self.rows < 2 {
-            return Err(invalid("rows", self.rows, "must be at least 2"));
-        }
-        let inner = positive("inner_radius", self.inner_radius)? * scale;
-        let outer = positive("outer_radius", self.outer_radius)? * scale;
-        let split = positive("split_radius", self.split_radius)? * scale;
-        let height = positive("height", self.height)? * scale;
+        let inner = self.inner_radius * scale;
+        let outer = self.outer_radius * scale;
+        let split = self.split_radius * scale;
+        let height = self.height * scale;
         if split <= inner {
             return Err(invalid(
                 "split_radius",
@@ -427,9 +383,6 @@ impl SplitBottomSpec {
                 self.outer_radius,
                 format!("must exceed split_radius = {}", self.split_radius),
             ));
-        }
-        if !(self.wedge_deg > 0.0 && self.wedge_deg <= 180.0) {
-            return Err(invalid("wedge_deg", self.wedge_deg, "must be in (0, 180]"));
         }
         let (r_min, r_max) = (d / (1.0 + self.w), self.w * d / (1.0 + self.w));
         if outer - split < 2.0 * d || split - inner < 2.0 * d || height < 2.0 * d {

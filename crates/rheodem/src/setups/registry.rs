@@ -1,0 +1,153 @@
+//! The registered set-ups: one line each. Everything that takes "any set-up" (the list of
+//! `rheodem setups`, its parameter tables, and the Python package's keywords) reads this
+//! list; a set-up's parameters are declared once, by its [`SetUpSchema`].
+
+use super::schema::{Field, SetUpSchema, Values, markdown};
+use super::shear_box::ShearBoxSpec;
+use super::split_bottom::SplitBottomSpec;
+use crate::scenario::ScenarioError;
+
+/// What the registry holds about a set-up.
+#[derive(Clone, Copy, Debug)]
+pub struct SetUpInfo {
+    /// [`SetUpSchema::NAME`].
+    pub name: &'static str,
+    /// [`SetUpSchema::SUMMARY`].
+    pub summary: &'static str,
+    /// [`SetUpSchema::FIELDS`].
+    pub fields: &'static [Field],
+    /// [`SetUpSchema::defaults`].
+    pub defaults: fn() -> toml::Table,
+    /// Whether [`SetUpSchema::from_values`] makes a valid spec of a base table and values
+    /// (the error names the key).
+    pub accepts: fn(toml::Table, &Values) -> Result<(), ScenarioError>,
+}
+
+fn accepts<S: SetUpSchema>(base: toml::Table, values: &Values) -> Result<(), ScenarioError> {
+    S::from_values(base, values).map(|_| ())
+}
+
+const fn info<S: SetUpSchema>() -> SetUpInfo {
+    SetUpInfo {
+        name: S::NAME,
+        summary: S::SUMMARY,
+        fields: S::FIELDS,
+        defaults: S::defaults,
+        accepts: accepts::<S>,
+    }
+}
+
+/// Every registered set-up.
+pub const SETUPS: &[SetUpInfo] = &[info::<ShearBoxSpec>(), info::<SplitBottomSpec>()];
+
+/// The set-up named `name`; an error lists the known names.
+pub fn find(name: &str) -> Result<&'static SetUpInfo, String> {
+    SETUPS.iter().find(|s| s.name == name).ok_or_else(|| {
+        let known: Vec<&str> = SETUPS.iter().map(|s| s.name).collect();
+        format!("`{name}` is not a set-up; known: {}", known.join(", "))
+    })
+}
+
+impl SetUpInfo {
+    /// The set-up's parameters as a markdown section: a heading, its summary and the table
+    /// of its parameters with their units, ranges and defaults.
+    pub fn markdown(&self) -> String {
+        format!(
+            "### `{}`\n\n{}\n\n{}",
+            self.name,
+            self.summary,
+            markdown(self.fields, &(self.defaults)())
+        )
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::setups::schema::Kind;
+
+    /// Every field of every set-up: a unique key that the spec stores (or the set-up
+    /// reads), a default the field's own check accepts, and choices the spec reads.
+    #[test]
+    fn every_field_is_stored_checked_and_defaulted() {
+        for s in SETUPS {
+            let defaults = (s.defaults)();
+            let mut keys: Vec<&str> = s.fields.iter().map(|f| f.key).collect();
+            keys.sort();
+            keys.dedup();
+            assert_eq!(keys.len(), s.fields.len(), "{}: a key twice", s.name);
+            for f in s.fields {
+                let Some(key) = f.spec_key() else { continue };
+                match defaults.get(key) {
+                    Some(v) => f
+                        .check(v)
+                        .unwrap_or_else(|e| panic!("{}: default {e}", s.name)),
+                    None => assert!(f.required, "{}: `{key}` has no default", s.name),
+                }
+            }
+            // Every spec key is a field (nothing the spec holds lacks its declaration).
+            for key in defaults.keys() {
+                assert!(
+                    s.fields.iter().any(|f| f.spec_key() == Some(key.as_str()))
+                        || key == "cohesion",
+                    "{}: spec key `{key}` is no field",
+                    s.name
+                );
+            }
+            // The required values, each the smallest round number its range takes.
+            let required: Values = s
+                .fields
+                .iter()
+                .filter(|f| f.required)
+                .map(|f| (f.key, toml::Value::Float(0.01)))
+                .collect();
+            (s.accepts)(toml::Table::new(), &required)
+                .unwrap_or_else(|e| panic!("{}: the defaults are refused: {e}", s.name));
+            for f in s.fields {
+                if let Kind::Choice(names) = f.kind {
+                    for name in names {
+                        let mut values = required.clone();
+                        values.push((f.key, toml::Value::String(name.to_string())));
+                        if let Err(e) = (s.accepts)(toml::Table::new(), &values) {
+                            // Only the linear law, which has no default strength, is
+                            // refused, and by what it needs.
+                            let e = e.to_string();
+                            assert!(
+                                (f.key, *name) == ("law", "linear")
+                                    && e.contains("needs max_force"),
+                                "{}: `{}` = {name}: {e}",
+                                s.name,
+                                f.key
+                            );
+                        }
+                    }
+                }
+            }
+        }
+        assert!(
+            find("chute")
+                .expect_err("no such set-up")
+                .contains("shear-box, split-bottom")
+        );
+    }
+
+    /// A study file's `setup` takes the name of every registered set-up, each a set-up of
+    /// its own.
+    #[test]
+    fn studies_take_every_registered_set_up() {
+        #[derive(serde::Deserialize)]
+        struct Study {
+            setup: crate::setups::study::SetUp,
+        }
+        let mut kinds: Vec<String> = SETUPS
+            .iter()
+            .map(|s| {
+                let study: Study = toml::from_str(&format!("setup = \"{}\"", s.name))
+                    .unwrap_or_else(|e| panic!("a study cannot name {}: {e}", s.name));
+                format!("{:?}", study.setup)
+            })
+            .collect();
+        kinds.dedup();
+        assert_eq!(kinds.len(), SETUPS.len());
+    }
+}
