@@ -5,8 +5,7 @@ use crate::setup_args::Parameters;
 use anyhow::{Context, Result, bail};
 use clap::Args;
 use rheodem::io::atomic::write_atomic;
-use rheodem::io::made_by::{self, Maker};
-use rheodem::setups::split_bottom::{SplitBottomRun, SplitBottomSpec, Stage};
+use rheodem::setups::split_bottom::{MemoryLimit, SplitBottomRun, SplitBottomSpec, Stage};
 use std::path::{Path, PathBuf};
 
 /// Arguments of `split-bottom`: the cell's parameters (every option overrides the same key
@@ -41,39 +40,6 @@ pub struct SplitBottomArgs {
     max_memory: Option<String>,
 }
 
-/// The keys whose values differ between the spec of a run on disk (`old`) and the one
-/// asked for (`new`), as `key: old → new`.
-fn spec_changes(old: &SplitBottomSpec, new: &SplitBottomSpec) -> Vec<String> {
-    let table = |s: &SplitBottomSpec| match toml::Value::try_from(s) {
-        Ok(toml::Value::Table(t)) => t,
-        _ => toml::Table::new(),
-    };
-    let (a, b) = (table(old), table(new));
-    let mut keys: Vec<&String> = a.keys().chain(b.keys()).collect();
-    keys.sort();
-    keys.dedup();
-    keys.into_iter()
-        .filter(|k| a.get(*k) != b.get(*k))
-        .map(|k| {
-            let show = |t: &toml::Table| t.get(k).map_or("(none)".into(), |v| v.to_string());
-            format!("{k}: {} → {}", show(&a), show(&b))
-        })
-        .collect()
-}
-
-/// Checks the cell's estimated memory against `limit` before anything is allocated, and
-/// says what is coming (filling a large cell takes minutes).
-fn estimate(spec: &SplitBottomSpec, threads: usize, limit: Option<u64>, quiet: bool) -> Result<()> {
-    let (particles, bytes) = spec.memory_estimate(threads, limit)?;
-    if !quiet {
-        eprintln!(
-            "split-bottom: about {particles} particles, an estimated {} of memory",
-            rheodem::memory::Bytes(bytes)
-        );
-    }
-    Ok(())
-}
-
 /// Runs `rheodem split-bottom`.
 pub fn run(args: SplitBottomArgs) -> Result<()> {
     let spec = args.parameters.spec(args.config.as_deref())?;
@@ -83,38 +49,27 @@ pub fn run(args: SplitBottomArgs) -> Result<()> {
         .out
         .clone()
         .unwrap_or_else(|| Path::new("runs").join("split-bottom"));
-    if !args.force {
-        made_by::expect(&dir, Maker::SplitBottom).map_err(|e| anyhow::anyhow!("{e}"))?;
-    }
-    let resumable = dir.join("checkpoint.bin").exists() && !args.force;
-    let mut run = pool.install(|| -> Result<SplitBottomRun> {
-        Ok(if resumable {
-            let r = SplitBottomRun::resume(&dir)?;
-            let from = args.from.as_ref().map(|p| p.display().to_string());
-            let mut changed = spec_changes(&r.spec, &spec);
-            if r.from != from {
-                changed.push(format!(
-                    "--from: {} → {}",
-                    r.from.as_deref().unwrap_or("(none)"),
-                    from.as_deref().unwrap_or("(none)")
-                ));
-            }
-            if !changed.is_empty() {
-                bail!(
-                    "{} holds a split-bottom run with other settings ({}): run the same \
-                     command to resume it, pass --force to replace it, or choose another --out",
-                    dir.display(),
-                    changed.join("; ")
-                );
-            }
-            r
-        } else if let Some(from) = &args.from {
-            estimate(&spec, threads, limit, args.quiet)?;
-            SplitBottomRun::from_settled(spec, from, &dir, args.force)?
-        } else {
-            estimate(&spec, threads, limit, args.quiet)?;
-            SplitBottomRun::start(spec, &dir, args.force)?
-        })
+    let memory = MemoryLimit {
+        threads,
+        bytes: limit,
+    };
+    let quiet = args.quiet;
+    let (mut run, _) = pool.install(|| {
+        SplitBottomRun::open(
+            spec,
+            &dir,
+            args.from.as_deref(),
+            args.force,
+            memory,
+            |particles, bytes| {
+                if !quiet {
+                    eprintln!(
+                        "split-bottom: about {particles} particles, an estimated {} of memory",
+                        rheodem::memory::Bytes(bytes)
+                    );
+                }
+            },
+        )
     })?;
     if !args.quiet {
         eprintln!(

@@ -491,3 +491,54 @@ fn a_thicker_wall_shell_freezes_the_same_packing_deeper() {
         );
     }
 }
+
+/// `open` starts a run in an empty directory (after its memory check), resumes it with
+/// the same settings, refuses other settings naming each changed key, and starts over
+/// with `force`; a cell beyond the memory limit is refused before anything is built.
+#[test]
+fn open_resumes_refuses_or_starts() {
+    use rheodem::setups::split_bottom::{MemoryLimit, Opened};
+    fn never(_: usize, _: u64) {
+        panic!("a resumed or refused run is not estimated");
+    }
+    let dir = tmp("open");
+    let memory = MemoryLimit {
+        threads: 1,
+        bytes: None,
+    };
+    let mut announced = None;
+    let (run, how) = SplitBottomRun::open(small(), &dir, None, false, memory, |n, bytes| {
+        announced = Some((n, bytes))
+    })
+    .expect("starts");
+    assert_eq!(how, Opened::Started);
+    let (n, bytes) = announced.expect("the estimate is announced before the start");
+    assert!(n > 0 && bytes > 0);
+    drop(run);
+    let (_, how) =
+        SplitBottomRun::open(small(), &dir, None, false, memory, never).expect("resumes");
+    assert_eq!(how, Opened::Resumed);
+    let faster = SplitBottomSpec {
+        omega: 2.0,
+        ..small()
+    };
+    match SplitBottomRun::open(faster.clone(), &dir, None, false, memory, never) {
+        Err(RunError::Changed { changes, .. }) => {
+            assert_eq!(changes, ["omega: 1.0 → 2.0"]);
+        }
+        other => panic!("not refused: {:?}", other.map(|(_, how)| how)),
+    }
+    let (run, how) =
+        SplitBottomRun::open(faster, &dir, None, true, memory, |_, _| {}).expect("forced");
+    assert_eq!((how, run.spec.omega), (Opened::Started, 2.0));
+    drop(run);
+    let tiny = MemoryLimit {
+        threads: 1,
+        bytes: Some(1000),
+    };
+    let e = SplitBottomRun::open(small(), &tmp("open-tiny"), None, false, tiny, |_, _| {})
+        .err()
+        .expect("beyond the limit");
+    assert!(e.to_string().contains("scale"), "{e}");
+    std::fs::remove_dir_all(&dir).ok();
+}

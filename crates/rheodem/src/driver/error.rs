@@ -51,6 +51,22 @@ pub enum RunError {
         .0.display()
     )]
     Mismatch(PathBuf),
+    /// The run directory holds a run of the same set-up with other settings.
+    #[error(
+        "{} holds a run with other settings ({}): give the same settings to resume it, \
+         pass --force to replace it, or choose another directory",
+        dir.display(), changes.join("; ")
+    )]
+    Changed {
+        /// The run directory.
+        dir: PathBuf,
+        /// Each changed setting, as `key: old → new`.
+        changes: Vec<String>,
+    },
+    /// The run directory was made by another command (the message says which, and how to
+    /// continue it).
+    #[error("{0}")]
+    OtherCommand(String),
     /// The state stopped being a meaningful DEM state.
     #[error(
         "the simulation became unstable at step {step} (t = {time:e} s): {cause}. {}. Usual \
