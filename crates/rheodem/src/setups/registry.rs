@@ -1,5 +1,5 @@
 //! The registered set-ups: one line each. Everything that takes "any set-up" (the list of
-//! `rheodem setups`, its parameter tables, and the Python package's keywords) reads this
+//! `rheodem setups`, its parameter tables, the checks of `accepts`) reads this
 //! list; a set-up's parameters are declared once, by its [`SetUpSchema`].
 
 use super::schema::{Field, SetUpSchema, Values, markdown};

@@ -1,7 +1,7 @@
 //! A set-up's parameters, declared once.
 //!
 //! Each set-up lists its parameters as [`Field`]s: the key (a TOML key, a `--kebab-case`
-//! option, a Python keyword), what it holds, its unit, its meaning and where its value may
+//! option, a keyword of a library call), what it holds, its unit, its meaning and where its value may
 //! lie. From that one list come the command-line options and their help (with the defaults
 //! read from the set-up's own spec), the checks of every value however it was given (a
 //! config file, a study point, an option) with an error that names the key and the allowed
@@ -95,7 +95,7 @@ pub enum Store {
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Field {
     /// Its key: in TOML files as written, on the command line in kebab-case
-    /// (`transient_strain` → `--transient-strain`), in Python as a keyword.
+    /// (`transient_strain` → `--transient-strain`), as a keyword of a library call.
     pub key: &'static str,
     /// What it holds.
     pub kind: Kind,
@@ -296,7 +296,7 @@ fn shown(v: &toml::Value) -> Option<String> {
     }
 }
 
-/// Parameter values given by key (command-line options, Python keywords), in the order
+/// Parameter values given by key (command-line options, keywords), in the order
 /// given.
 pub type Values = Vec<(&'static str, toml::Value)>;
 

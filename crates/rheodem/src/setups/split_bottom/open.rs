@@ -1,7 +1,7 @@
 //! Opening a split-bottom run directory for a spec: the unfinished (or finished) run of the
 //! same settings is resumed, one of other settings is refused naming each changed key, and
 //! otherwise a new run starts, from scratch or from a settled state, once its memory has
-//! been checked. Every front end (the command line, the Python package) opens runs this
+//! been checked. Every front end (the command line, a library call) opens runs this
 //! way.
 
 use super::spec::SplitBottomSpec;
