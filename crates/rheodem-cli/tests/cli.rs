@@ -519,6 +519,16 @@ fn concurrent_processes_write_the_database_without_loss() {
     let csv = String::from_utf8_lossy(&out.stdout);
     assert_eq!(csv.lines().count(), archive + 1, "{csv}");
     assert!(csv.lines().skip(1).all(|l| l.starts_with("s2,")));
+    // The long form: one row per stored key, each point's `mu_p` among them.
+    let out = rheodem(&["db", "export", "--db", &db_arg, "--study", "s2", "--values"]);
+    assert_success(&out);
+    let values = String::from_utf8_lossy(&out.stdout);
+    assert!(values.starts_with("study,name,setup,kind,key,value,error,text\n"));
+    let mu_rows = values
+        .lines()
+        .filter(|l| l.starts_with("s2,") && l.contains(",shear-box,parameter,mu_p,"))
+        .count();
+    assert_eq!(mu_rows, archive, "{values}");
     let _ = std::fs::remove_dir_all(&dir);
 }
 
@@ -680,4 +690,34 @@ fn shipped_studies_are_valid_and_have_quick_variants() {
         n += 1;
     }
     assert!(n >= 3, "{n} studies shipped");
+}
+
+/// `rheodem setups` lists every registered set-up; with a name it prints that set-up's
+/// parameter table (the split-bottom cell's `mu_p`, stored as `friction`, shows the spec's
+/// default); an unknown name is refused with the known ones.
+#[test]
+fn setups_lists_the_set_ups_and_their_parameters() {
+    let out = rheodem(&["setups"]);
+    assert_success(&out);
+    let list = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        list.contains("shear-box") && list.contains("split-bottom"),
+        "{list}"
+    );
+    let out = rheodem(&["setups", "split-bottom"]);
+    assert_success(&out);
+    let table = String::from_utf8_lossy(&out.stdout);
+    let default = rheodem::setups::split_bottom::SplitBottomSpec::default().friction;
+    let row = table
+        .lines()
+        .find(|l| l.starts_with("| `mu_p` |"))
+        .unwrap_or_else(|| panic!("no mu_p row: {table}"));
+    assert!(row.ends_with(&format!("| {default} |")), "{row}");
+    let out = rheodem(&["setups", "chute"]);
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("`chute` is not a set-up; known: shear-box, split-bottom"),
+        "{err}"
+    );
 }
