@@ -1,8 +1,10 @@
 //! The `rheodem` command-line program: the subcommands and the helpers they share (worker
 //! threads, memory limits). Each subcommand lives in a file of its own: `scenario_run.rs`
-//! (`run`, `resume`, `check`), `bench.rs`, `shear.rs`, `split_bottom.rs`, `study.rs`,
-//! `cg.rs`, `predict.rs`, `contact.rs`, `setups.rs`; `setup_args.rs` derives a set-up's
-//! options from its parameters.
+//! (`run`, `resume`, `check`), `bench.rs`, `shear.rs` (`sweep`, `compare`, `fit`, `db`),
+//! `wet_study.rs`, `study.rs`, `cg.rs`, `predict.rs`, `contact.rs`, `setups.rs`. The
+//! registered set-ups (`shear-box`, `split-bottom`, …) need no file: `setup_run.rs` builds
+//! a subcommand for each from the registry, with the options `setup_args.rs` derives from
+//! its parameters.
 
 mod bench;
 mod cg;
@@ -12,13 +14,14 @@ mod predict;
 mod progress;
 mod scenario_run;
 mod setup_args;
+mod setup_run;
 mod setups;
 mod shear;
-mod split_bottom;
 mod study;
+mod wet_study;
 
 use anyhow::{Context, Result, bail};
-use clap::{Parser, Subcommand};
+use clap::{CommandFactory, FromArgMatches, Parser, Subcommand};
 use std::path::PathBuf;
 use std::process::ExitCode;
 
@@ -37,10 +40,6 @@ enum Command {
     Run(scenario_run::RunArgs),
     /// Continue a run from its last checkpoint.
     Resume(scenario_run::ResumeArgs),
-    /// Stress-controlled simple shear box at given (μ_p, I, p*, Bo): steady-state φ, μ, Z, σ.
-    ShearBox(shear::ShearBoxArgs),
-    /// Split-bottom ring shear cell: fill, settle, shear; wall torque and the shear band.
-    SplitBottom(split_bottom::SplitBottomArgs),
     /// Coarse-grained fields of a run again, with its settings or others: a split-bottom run
     /// from its stored snapshots, a periodic-box run from its stored samples (fields.csv and
     /// fields.vti; docs/coarse-graining.md).
@@ -116,7 +115,17 @@ enum Command {
 }
 
 fn main() -> ExitCode {
-    match dispatch(Cli::parse()) {
+    // The derived subcommands, and one per registered set-up after `run` and `resume`.
+    let matches = setup_run::with_set_ups(Cli::command(), 2).get_matches();
+    let outcome = match matches.subcommand() {
+        Some((name, m)) if let Ok(info) = rheodem::setups::registry::find(name) => {
+            setup_run::run(info, m)
+        }
+        _ => Cli::from_arg_matches(&matches)
+            .map_err(|e| e.exit())
+            .and_then(dispatch),
+    };
+    match outcome {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
             eprintln!("error: {}", error_chain(&e));
@@ -224,17 +233,13 @@ pub(crate) fn pool(threads: Option<usize>) -> Result<(rayon::ThreadPool, usize)>
 
 fn dispatch(cli: Cli) -> Result<()> {
     match cli.command {
-        Command::SplitBottom(args) => split_bottom::run(args),
         Command::Cg(args) => cg::run(args),
         Command::Run(args) => scenario_run::run(args),
         Command::Resume(args) => scenario_run::resume(args),
         Command::Contact(cmd) => contact::run(cmd),
         Command::Predict(args) => predict::run(&args),
         Command::Fit { dir } => shear::fit(&dir),
-        Command::WetStudy { dirs, figures, mu } => {
-            split_bottom::wet_study(&dirs, figures.as_deref(), mu)
-        }
-        Command::ShearBox(args) => shear::shear_box(args),
+        Command::WetStudy { dirs, figures, mu } => wet_study::run(&dirs, figures.as_deref(), mu),
         Command::Sweep {
             file,
             jobs,

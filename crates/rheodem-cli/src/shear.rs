@@ -1,159 +1,15 @@
-//! `rheodem shear-box` and `rheodem sweep`.
+//! `rheodem sweep`, `compare`, `fit` and `db`: shear-box sweeps and their results.
 
-use crate::setup_args::Parameters;
 use anyhow::{Context, Result, bail};
-use clap::Args;
-use indicatif::{ProgressBar, ProgressStyle};
 use rheodem::io::atomic::write_atomic;
-use rheodem::io::made_by::{self, Maker};
 use rheodem::run::RunError;
 use rheodem::setups::archive::{archive_point, archived, read_archive, refresh_table};
 use rheodem::setups::results_db::ResultsDb;
-use rheodem::setups::shear_box::ShearBoxSpec;
 use rheodem::setups::sweep::{
     PointResult, PointStatus, SweepSpec, default_out, expand, point_status, results_csv, run_point,
 };
 use std::path::{Path, PathBuf};
 use std::sync::Mutex;
-
-/// Arguments of `shear-box`: the point's parameters (every option overrides the same key
-/// of `--config`) and how to run it.
-#[derive(Args)]
-#[command(allow_negative_numbers = true)]
-pub struct ShearBoxArgs {
-    /// A TOML file with the point's keys (mu_p, inertial, softness, bond, cohesion, …).
-    #[arg(long)]
-    config: Option<PathBuf>,
-    #[command(flatten)]
-    parameters: Parameters<ShearBoxSpec>,
-    /// Run directory (default: runs/shear-box).
-    #[arg(long, short)]
-    out: Option<PathBuf>,
-    /// Worker threads.
-    #[arg(long, short)]
-    threads: Option<usize>,
-    /// No progress bar.
-    #[arg(long, short)]
-    quiet: bool,
-    /// Start over even if the directory holds a run of other settings (otherwise the
-    /// same point resumes, and another is refused).
-    #[arg(long)]
-    force: bool,
-}
-
-fn bar(total: u64, quiet: bool, prefix: String) -> ProgressBar {
-    let bar = if quiet {
-        ProgressBar::hidden()
-    } else {
-        ProgressBar::new(total)
-    };
-    bar.set_style(
-        ProgressStyle::with_template("{prefix} {bar:30} {percent:>3}%  ETA {eta}")
-            .unwrap_or_else(|_| ProgressStyle::default_bar()),
-    );
-    bar.set_prefix(prefix);
-    bar
-}
-
-/// Runs `shear-box`.
-pub fn shear_box(a: ShearBoxArgs) -> Result<()> {
-    let spec = a.parameters.spec(a.config.as_deref())?;
-    let dv = spec.derive()?;
-    let dir = a
-        .out
-        .clone()
-        .unwrap_or_else(|| PathBuf::from("runs/shear-box"));
-    let (pool, n) = crate::pool(a.threads)?;
-    if a.force {
-        // Only files of a rheodem run are removed: the point then starts over.
-        if made_by::read(&dir).is_some() {
-            for f in ["checkpoint.bin", "steady_state.json"] {
-                match std::fs::remove_file(dir.join(f)) {
-                    Err(e) if e.kind() != std::io::ErrorKind::NotFound => {
-                        return Err(e)
-                            .with_context(|| format!("cannot remove {}", dir.join(f).display()));
-                    }
-                    _ => {}
-                }
-            }
-        }
-    } else {
-        made_by::expect(&dir, Maker::ShearBox).map_err(|e| anyhow::anyhow!("{e}"))?;
-    }
-    if !a.quiet {
-        eprintln!(
-            "resolved: p = σ_yy target = {:.6e} Pa, γ̇ = {:.6e} 1/s, f_a^max = {:.6e} N, S_c = {:.4e} m, t_k = {:.4e} s, run {:.4e} s ({} strain)",
-            dv.pressure,
-            dv.shear_rate,
-            dv.max_force,
-            dv.rupture_distance,
-            dv.stiffness_time,
-            dv.duration,
-            spec.strain
-        );
-    }
-    let progress = bar(1000, a.quiet, "shear".into());
-    let name = dir
-        .file_name()
-        .map_or("shear-box".into(), |s| s.to_string_lossy().into_owned());
-    let result = pool
-        .install(|| {
-            run_point(&name, &spec, &dir, n, &mut |done, total| {
-                if done % 256 == 0 {
-                    progress.set_position(done * 1000 / total.max(1));
-                }
-            })
-        })
-        .map_err(|e| match e {
-            RunError::Mismatch(_) => {
-                anyhow::anyhow!("{e}; or pass --force to start it over with the new settings")
-            }
-            other => other.into(),
-        })?;
-    progress.finish_and_clear();
-    report(&result, &dir);
-    Ok(())
-}
-
-pub(crate) fn report(r: &PointResult, dir: &Path) {
-    match &r.steady_state {
-        Some(ss) => {
-            println!(
-                "steady state over strain {:.1}–{:.1}: φ = {:.5} ± {:.5}, μ = {:.4} ± {:.4}, Z = {:.3} ± {:.3}, σ_yy = {:.5e} ± {:.1e} Pa (target {:.5e}), P = tr σ/3 = {:.5e} Pa",
-                ss.strain_window[0],
-                ss.strain_window[1],
-                ss.volume_fraction.mean,
-                ss.volume_fraction.error,
-                ss.friction.mean,
-                ss.friction.error,
-                ss.coordination.mean,
-                ss.coordination.error,
-                ss.sigma_yy.mean,
-                ss.sigma_yy.error,
-                r.derived.pressure,
-                ss.mean_stress.mean
-            );
-            if let Some(s) = &ss.slab_rates {
-                println!(
-                    "local shear rate over γ̇ in {} slabs: {:.2}–{:.2}, rms deviation {:.2} (1 everywhere for homogeneous shear)",
-                    s.slabs, s.min, s.max, s.rms_deviation
-                );
-            }
-            if !ss.steady {
-                eprintln!(
-                    "warning: {} did NOT reach a steady state: {}",
-                    dir.display(),
-                    ss.note
-                );
-            }
-        }
-        None => eprintln!(
-            "warning: {}: too few time-series rows past the transient to average",
-            dir.display()
-        ),
-    }
-    println!("outputs in {}", dir.display());
-}
 
 /// Runs `sweep`: `jobs` points at once, one thread each.
 pub fn sweep(path: &Path, jobs: Option<usize>, quiet: bool, db: Option<&Path>) -> Result<()> {
@@ -247,7 +103,11 @@ pub(crate) fn run_sweep(
         match outcome {
             Ok(r) => {
                 if !quiet {
-                    report(&r, &dir);
+                    let (text, warnings) = r.report(&dir);
+                    print!("{text}");
+                    for w in warnings {
+                        eprintln!("warning: {w}");
+                    }
                 }
                 // One worker at a time writes the tables and the archive.
                 let Ok(mut all) = results.lock() else {

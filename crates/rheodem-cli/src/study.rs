@@ -1,7 +1,7 @@
 //! `rheodem study`: run a study here, or on a Slurm cluster, follow its progress, gather
 //! its points into its database, and report on it (docs/studies.md).
 
-use crate::shear::{report as report_point, run_sweep, sweep_dirs};
+use crate::shear::{run_sweep, sweep_dirs};
 use anyhow::{Context, Result, bail};
 use rheodem::io::atomic::write_atomic;
 use rheodem::run::RunError;
@@ -396,7 +396,11 @@ fn run_one(s: &Loaded, name: &str, threads: usize) -> Result<()> {
                 if let Some(a) = &s.archive {
                     archive_point(a, &r)?;
                 }
-                report_point(&r, &dir);
+                let (text, warnings) = r.report(&dir);
+                print!("{text}");
+                for w in warnings {
+                    eprintln!("warning: {w}");
+                }
                 Ok::<(), anyhow::Error>(())
             })
         }

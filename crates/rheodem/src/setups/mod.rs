@@ -9,8 +9,10 @@ pub mod point_result;
 pub mod regimes;
 pub mod registry;
 pub mod results_db;
+pub mod runner;
 pub mod schema;
 pub mod shear_box;
+mod shear_box_run;
 pub mod slurm;
 pub mod split_bottom;
 /// The split-bottom cell's fields, under their former path.

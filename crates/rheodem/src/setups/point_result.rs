@@ -4,6 +4,7 @@
 use super::shear_box::{Derived, ShearBoxSpec, SteadyState};
 use serde::{Deserialize, Serialize};
 use std::fmt::Write;
+use std::path::Path;
 
 /// Outcome of one point.
 #[derive(Clone, Debug, Serialize, Deserialize)]
@@ -21,6 +22,55 @@ pub struct PointResult {
     /// Git commit of the build that finished the point.
     #[serde(default)]
     pub commit: String,
+}
+
+impl PointResult {
+    /// The point's steady state in words (as the command line prints it), and warnings
+    /// when it did not reach one; `dir` is its run directory.
+    pub fn report(&self, dir: &Path) -> (String, Vec<String>) {
+        let mut text = String::new();
+        let mut warnings = Vec::new();
+        match &self.steady_state {
+            Some(ss) => {
+                let _ = writeln!(
+                    text,
+                    "steady state over strain {:.1}–{:.1}: φ = {:.5} ± {:.5}, μ = {:.4} ± {:.4}, Z = {:.3} ± {:.3}, σ_yy = {:.5e} ± {:.1e} Pa (target {:.5e}), P = tr σ/3 = {:.5e} Pa",
+                    ss.strain_window[0],
+                    ss.strain_window[1],
+                    ss.volume_fraction.mean,
+                    ss.volume_fraction.error,
+                    ss.friction.mean,
+                    ss.friction.error,
+                    ss.coordination.mean,
+                    ss.coordination.error,
+                    ss.sigma_yy.mean,
+                    ss.sigma_yy.error,
+                    self.derived.pressure,
+                    ss.mean_stress.mean
+                );
+                if let Some(s) = &ss.slab_rates {
+                    let _ = writeln!(
+                        text,
+                        "local shear rate over γ̇ in {} slabs: {:.2}–{:.2}, rms deviation {:.2} (1 everywhere for homogeneous shear)",
+                        s.slabs, s.min, s.max, s.rms_deviation
+                    );
+                }
+                if !ss.steady {
+                    warnings.push(format!(
+                        "{} did NOT reach a steady state: {}",
+                        dir.display(),
+                        ss.note
+                    ));
+                }
+            }
+            None => warnings.push(format!(
+                "{}: too few time-series rows past the transient to average",
+                dir.display()
+            )),
+        }
+        let _ = writeln!(text, "outputs in {}", dir.display());
+        (text, warnings)
+    }
 }
 
 /// The results table (CSV), one row per finished point.

@@ -1,10 +1,13 @@
 //! The registered set-ups: one line each. Everything that takes "any set-up" (the list of
-//! `rheodem setups`, its parameter tables, the checks of `accepts`) reads this
-//! list; a set-up's parameters are declared once, by its [`SetUpSchema`].
+//! `rheodem setups`, its parameter tables, the checks of `accepts`, the command line's
+//! subcommand per set-up through `run`) reads this list; a set-up's parameters are
+//! declared once, by its [`SetUpSchema`], and it runs as an [`Experiment`].
 
+use super::runner::{Event, Experiment, Finished, RunOptions};
 use super::schema::{Field, SetUpSchema, Values, markdown};
 use super::shear_box::ShearBoxSpec;
 use super::split_bottom::SplitBottomSpec;
+use crate::run::RunError;
 use crate::scenario::ScenarioError;
 
 /// What the registry holds about a set-up.
@@ -21,19 +24,47 @@ pub struct SetUpInfo {
     /// Whether [`SetUpSchema::from_values`] makes a valid spec of a base table and values
     /// (the error names the key).
     pub accepts: fn(toml::Table, &Values) -> Result<(), ScenarioError>,
+    /// [`Experiment::FROM`].
+    pub from: Option<&'static str>,
+    /// [`Experiment::ESTIMATES_MEMORY`].
+    pub estimates_memory: bool,
+    /// Makes the spec of a base table and values ([`SetUpSchema::from_values`]) and runs
+    /// it ([`Experiment::run`]), in the caller's thread pool.
+    pub run: RunFn,
 }
+
+/// How [`SetUpInfo::run`] is called: the base table (a config file's, or empty), the
+/// values given by key, the run options and the receiver of the run's events.
+pub type RunFn = fn(
+    toml::Table,
+    &Values,
+    &RunOptions<'_>,
+    &mut dyn FnMut(Event<'_>),
+) -> Result<Finished, RunError>;
 
 fn accepts<S: SetUpSchema>(base: toml::Table, values: &Values) -> Result<(), ScenarioError> {
     S::from_values(base, values).map(|_| ())
 }
 
-const fn info<S: SetUpSchema>() -> SetUpInfo {
+fn run<S: Experiment>(
+    base: toml::Table,
+    values: &Values,
+    options: &RunOptions<'_>,
+    events: &mut dyn FnMut(Event<'_>),
+) -> Result<Finished, RunError> {
+    S::from_values(base, values)?.run(options, events)
+}
+
+const fn info<S: Experiment>() -> SetUpInfo {
     SetUpInfo {
         name: S::NAME,
         summary: S::SUMMARY,
         fields: S::FIELDS,
         defaults: S::defaults,
         accepts: accepts::<S>,
+        from: S::FROM,
+        estimates_memory: S::ESTIMATES_MEMORY,
+        run: run::<S>,
     }
 }
 

@@ -382,6 +382,22 @@ pub fn table_of<T: serde::Serialize>(spec: &T) -> toml::Table {
     }
 }
 
+/// The keys whose values differ between the spec of a run on disk (`old`) and the one
+/// asked for (`new`), as `key: old → new`, in key order.
+pub fn spec_changes<T: serde::Serialize>(old: &T, new: &T) -> Vec<String> {
+    let (a, b) = (table_of(old), table_of(new));
+    let mut keys: Vec<&String> = a.keys().chain(b.keys()).collect();
+    keys.sort();
+    keys.dedup();
+    keys.into_iter()
+        .filter(|k| a.get(*k) != b.get(*k))
+        .map(|k| {
+            let show = |t: &toml::Table| t.get(k).map_or("(none)".into(), |v| v.to_string());
+            format!("{k}: {} → {}", show(&a), show(&b))
+        })
+        .collect()
+}
+
 /// The parameters of `fields` as a markdown table (key, unit, meaning, allowed, default),
 /// with the defaults of `defaults` (by spec key).
 pub fn markdown(fields: &[Field], defaults: &toml::Table) -> String {

@@ -238,13 +238,16 @@ pub fn run_point(
     if let Some(done) = finished(&result_path) {
         return Ok(done);
     }
+    // The point file names the point being run; a refused run keeps its own.
     let marker = dir.join(POINT_FILE);
-    let text = serde_json::to_string_pretty(spec).map_err(|e| RunError::Io {
-        operation: "serialise",
-        path: marker.clone(),
-        source: e.into(),
-    })?;
-    write_atomic(&marker, text.as_bytes()).map_err(io_err("write", &marker))?;
+    let write_marker = || {
+        let text = serde_json::to_string_pretty(spec).map_err(|e| RunError::Io {
+            operation: "serialise",
+            path: marker.clone(),
+            source: e.into(),
+        })?;
+        write_atomic(&marker, text.as_bytes()).map_err(io_err("write", &marker))
+    };
     let mut run = if dir.join("checkpoint.bin").exists() {
         let run = Run::resume_locked(lock, dir)?;
         // The directory name does not encode every field (strain, material, …): a run
@@ -252,8 +255,13 @@ pub fn run_point(
         if run.scenario != scenario {
             return Err(RunError::Mismatch(dir.to_path_buf()));
         }
+        write_marker()?;
         run
     } else {
+        // Written before the start, whose preparation may take a while: the point shows
+        // as running meanwhile.
+        std::fs::create_dir_all(dir).map_err(io_err("create the directory", dir))?;
+        write_marker()?;
         Run::start_locked(lock, existed, scenario, Path::new("."), dir, threads, true)?
     };
     made_by::mark(dir, Maker::ShearBox).map_err(io_err("write", &dir.join(made_by::FILE)))?;

@@ -21,7 +21,8 @@
 //!
 //! The run goes through the staged run driver ([`crate::driver`]), which owns its
 //! directory, lock, checkpoints, resumption and summary; this module supplies the stages.
-//! Its files: `open` (resume, refuse or start a run in a directory), `spec` (the keys, their
+//! Its files: `open` (resume, refuse or start a run in a directory), `runner` (the
+//! cell as an experiment any front end runs by name), `spec` (the keys, their
 //! checks, the geometry and the filling), `schema` (the
 //! parameters, declared once, and how given values become a spec), `state` (the
 //! checkpointed state and the cell's measurements), `stages` (fill, settle, shear and the
@@ -31,12 +32,13 @@
 pub mod fields;
 mod open;
 mod outputs;
+mod runner;
 mod schema;
 mod spec;
 mod stages;
 mod state;
 
-pub use open::{MemoryLimit, Opened, spec_changes};
+pub use open::{MemoryLimit, Opened};
 pub use spec::{Cohesion, Geometry, Groups, SplitBottomSpec, TimeStepRule};
 pub use stages::SplitBottomRun;
 pub use state::{PARTS, Row, SLABS, SettleReport, ShearResults, SlabFit, SplitBottomState, Stage};

@@ -10,7 +10,7 @@ use super::state::SplitBottomState;
 use crate::driver::Driver;
 use crate::io::made_by::{self, Maker};
 use crate::run::RunError;
-use crate::setups::schema::table_of;
+use crate::setups::schema::spec_changes;
 use std::path::Path;
 
 /// How [`Driver::open`] found its directory.
@@ -30,22 +30,6 @@ pub struct MemoryLimit {
     pub threads: usize,
     /// Largest estimated peak (bytes).
     pub bytes: Option<u64>,
-}
-
-/// The keys whose values differ between the spec of a run on disk (`old`) and the one
-/// asked for (`new`), as `key: old → new`.
-pub fn spec_changes(old: &SplitBottomSpec, new: &SplitBottomSpec) -> Vec<String> {
-    let (a, b) = (table_of(old), table_of(new));
-    let mut keys: Vec<&String> = a.keys().chain(b.keys()).collect();
-    keys.sort();
-    keys.dedup();
-    keys.into_iter()
-        .filter(|k| a.get(*k) != b.get(*k))
-        .map(|k| {
-            let show = |t: &toml::Table| t.get(k).map_or("(none)".into(), |v| v.to_string());
-            format!("{k}: {} → {}", show(&a), show(&b))
-        })
-        .collect()
 }
 
 impl Driver<SplitBottomState> {

@@ -1,0 +1,111 @@
+//! The split-bottom cell as an [`Experiment`]: the run directory opened by
+//! [`SplitBottomRun::open`], then every stage run to its end, with a warning where settling
+//! ended at its time limit.
+
+use super::open::MemoryLimit;
+use super::spec::SplitBottomSpec;
+use super::stages::SplitBottomRun;
+use super::state::Stage;
+use crate::analysis::Estimate;
+use crate::run::{RunError, io_err};
+use crate::setups::runner::{Event, Experiment, Finished, RunOptions};
+use std::fmt::Write;
+
+impl Experiment for SplitBottomSpec {
+    const FROM: Option<&'static str> = Some(
+        "Start shearing from the settled state of this earlier split-bottom run directory \
+         (same cell and particles).",
+    );
+
+    const ESTIMATES_MEMORY: bool = true;
+
+    fn run(
+        self,
+        options: &RunOptions<'_>,
+        events: &mut dyn FnMut(Event<'_>),
+    ) -> Result<Finished, RunError> {
+        let dir = options.dir;
+        let memory = MemoryLimit {
+            threads: options.threads,
+            bytes: options.max_memory,
+        };
+        let (mut run, _) = SplitBottomRun::open(
+            self,
+            dir,
+            options.from,
+            options.force,
+            memory,
+            |n, bytes| {
+                events(Event::Note(&format!(
+                    "split-bottom: about {n} particles, an estimated {} of memory",
+                    crate::memory::Bytes(bytes)
+                )));
+            },
+        )?;
+        events(Event::Note(&format!(
+            "split-bottom: {} particles ({} free before settling), dt = {:.3e} s, outputs in {}",
+            run.simulation.particles.len(),
+            run.simulation.particles.free_count(),
+            run.simulation.dt,
+            dir.display()
+        )));
+        events(Event::Particles(run.simulation.particles.len()));
+        // Stage by stage (a finished run only rewrites its outputs), with a warning when
+        // settling ended on its time limit.
+        loop {
+            let stage = run.stage;
+            run.advance_stage(dir, &mut |p| events(Event::Progress(p)))?;
+            if stage == Stage::Settle
+                && let Some(notice) = run.settled.as_ref().and_then(|r| r.limit_notice(&run.spec))
+            {
+                events(Event::Warning(&notice));
+            }
+            if run.stage == Stage::Done {
+                break;
+            }
+        }
+        let path = dir.join("summary.json");
+        let text = std::fs::read_to_string(&path).map_err(io_err("read", &path))?;
+        let summary = serde_json::from_str(&text).map_err(|e| RunError::Io {
+            operation: "parse",
+            path: path.clone(),
+            source: e.into(),
+        })?;
+        Ok(Finished {
+            summary,
+            report: report(&run, dir),
+            warnings: Vec::new(),
+        })
+    }
+}
+
+/// The finished run in words: time, wall time, net torque and balance, the band per slab.
+fn report(run: &SplitBottomRun, dir: &std::path::Path) -> String {
+    let res = run.results();
+    let show = |e: &Option<Estimate>| {
+        e.map_or("n/a".to_string(), |e| {
+            format!("{:.4e} ± {:.1e}", e.mean, e.error)
+        })
+    };
+    let mut text = String::new();
+    let _ = writeln!(
+        text,
+        "done: t = {:.3} s, {:.0} s wall; net torque (full ring) {} N m; balance {} N m",
+        run.simulation.time,
+        run.wall_seconds,
+        show(&res.net_torque),
+        show(&res.balance)
+    );
+    for b in &res.band {
+        let _ = match &b.fit {
+            Ok(f) => writeln!(
+                text,
+                "  {:7} slab z ∈ [{:.4}, {:.4}] m: R_c = {:.4e} ± {:.1e} m, W = {:.3e} ± {:.1e} m",
+                b.slab, b.z[0], b.z[1], f.centre, f.centre_err, f.width, f.width_err
+            ),
+            Err(e) => writeln!(text, "  {:7} slab: no fit ({e})", b.slab),
+        };
+    }
+    let _ = writeln!(text, "outputs in {}", dir.display());
+    text
+}
