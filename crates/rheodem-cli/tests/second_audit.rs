@@ -153,7 +153,7 @@ fn r2_to_r8_bad_inputs_are_refused_naming_their_key() {
         (
             "R3 surface tension without the Willett law",
             with_short(&["--surface-tension", "0.02"]),
-            vec!["`surface_tension`", "law = willett"],
+            vec!["`surface_tension`", "law = liquid_bridge"],
             vec![],
         ),
         (

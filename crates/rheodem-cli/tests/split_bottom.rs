@@ -22,7 +22,8 @@ fn bad_input_is_refused_with_the_key_named() {
         (&["split-bottom", "--law", "linear"], "needs max_force"),
         (
             &["split-bottom", "--law", "glue"],
-            "`law` = \"glue\": must be one of dry, willett, linear",
+            "`law` = \"glue\": is not a known adhesive law; known: none (dry), reversible, \
+             liquid_bridge (willett), linear_irreversible (linear)",
         ),
     ];
     for (args, expected) in cases {

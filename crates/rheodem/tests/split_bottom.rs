@@ -282,20 +282,28 @@ fn bad_geometry_gets_specific_errors() {
 /// runs equal, to rounding, those computed afterwards from its stored snapshots when both
 /// see the same instants; the band holds the material (φ near a packing's) and flows, the
 /// pressure grows with depth, and the bridges of the Willett law show up per particle.
+/// The papers' reference bridge: Willett, 0.020 N/m, 75 nl, 20°.
+fn willett() -> rheodem::contact::LawSpec {
+    use rheodem::contact::{LawKind, LawSpec};
+    LawSpec::new(
+        LawKind::LiquidBridge,
+        [
+            ("surface_tension", 0.02),
+            ("volume", 75e-12),
+            ("contact_angle_deg", 20.0),
+        ],
+    )
+}
+
 #[test]
 fn small_wet_cell_fields_on_the_fly_equal_offline() {
     use rheodem::cg::fields;
-    use rheodem::setups::split_bottom::Cohesion;
     use rheodem::setups::split_bottom_fields::{
         FieldSettings, export_mercury, material, offline_fields, read_run,
     };
     let dir = tmp("fields");
     let spec = SplitBottomSpec {
-        cohesion: Cohesion::Willett {
-            surface_tension: 0.02,
-            volume: 75e-12,
-            contact_angle_deg: 20.0,
-        },
+        cohesion: willett(),
         snapshots: 4,
         average_from: 0.03,
         ..small()
@@ -365,7 +373,7 @@ fn small_wet_cell_fields_on_the_fly_equal_offline() {
     }
 
     // The material: the volume fraction inside the bed, the pressure rising with depth.
-    let points = fields(&live, Some(&material(&run.spec)));
+    let points = fields(&live, Some(&material(&run)));
     let g = &run.geometry;
     let at = |r: f64, z: f64| {
         points
@@ -402,14 +410,9 @@ fn small_wet_cell_fields_on_the_fly_equal_offline() {
 /// zero in a wet bed, and a test against it never passed (settling ran to its time limit).
 #[test]
 fn r1_wet_cells_finish_settling() {
-    use rheodem::setups::split_bottom::Cohesion;
     let dir = tmp("r1-wet");
     let mut spec = small();
-    spec.cohesion = Cohesion::Willett {
-        surface_tension: 0.02,
-        volume: 75e-12,
-        contact_angle_deg: 20.0,
-    };
+    spec.cohesion = willett();
     spec.settle_max_time = 1.0;
     let mut run = SplitBottomRun::start(spec.clone(), &dir, false).expect("start");
     run.advance_stage(&dir, &mut |_| {}).expect("settle");

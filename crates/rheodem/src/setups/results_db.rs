@@ -415,6 +415,18 @@ impl Record {
         )?;
         let mut parameters = Vec::new();
         flatten(&self.parameters, "", &mut parameters);
+        // Adhesive laws under their registered names (`willett` of earlier files is
+        // `liquid_bridge`), so that one query finds a law's runs whatever wrote them.
+        for e in &mut parameters {
+            if (e.key == "cohesion" || e.key == "cohesion.law")
+                && let Some(kind) = e
+                    .text
+                    .as_deref()
+                    .and_then(|t| crate::contact::LawKind::from_name(t).ok())
+            {
+                e.text = Some(kind.name().to_string());
+            }
+        }
         let mut results = Vec::new();
         flatten(&self.results, "", &mut results);
         results.extend(self.derived.iter().cloned());
@@ -848,7 +860,7 @@ mod tests {
         assert_eq!(db.studies().expect("studies"), ["wet"]);
         let csv = db.export_cells_csv(None).expect("csv");
         let row = csv.lines().nth(1).expect("a row");
-        assert!(row.starts_with("wet,v75,willett,0.02,75"), "{row}");
+        assert!(row.starts_with("wet,v75,liquid_bridge,0.02,75"), "{row}");
         let cohesion: f64 = row.split(',').nth(16).expect("c*").parse().expect("number");
         assert!((cohesion - 0.403).abs() < 0.001, "{row}");
         let not_summary = Path::new(env!("CARGO_MANIFEST_DIR")).join("Cargo.toml");
@@ -887,7 +899,7 @@ mod tests {
         assert_eq!(value("parameter", "omega").0, Some(0.5));
         assert_eq!(
             value("parameter", "cohesion.law").1.as_deref(),
-            Some("willett")
+            Some("liquid_bridge")
         );
         let particles: i64 = db
             .connection
@@ -972,7 +984,7 @@ mod tests {
                 .lines()
                 .nth(1)
                 .expect("a row")
-                .starts_with("wet,v75,willett,0.02,75")
+                .starts_with("wet,v75,liquid_bridge,0.02,75")
         );
         assert!(cells.contains("2025-06-07T08:09:10Z"));
         let version: i64 = db

@@ -226,7 +226,9 @@ impl Field {
         }
         let allowed = match self.kind {
             Kind::Number | Kind::Count => self.range.short(),
-            Kind::Choice(_) | Kind::AdhesiveLaw => format!("one of {}", self.choices().join(", ")),
+            Kind::Choice(_) => format!("one of {}", self.choices().join(", ")),
+            // With the aliases in brackets: `none (dry), reversible, …`.
+            Kind::AdhesiveLaw => format!("one of {}", crate::contact::LawKind::known()),
             Kind::Switch => String::new(),
         };
         if !allowed.is_empty() {
@@ -407,7 +409,8 @@ pub fn markdown(fields: &[Field], defaults: &toml::Table) -> String {
         let allowed = match f.kind {
             Kind::Number | Kind::Count => f.range.short(),
             Kind::Switch => "true, false".into(),
-            Kind::Choice(_) | Kind::AdhesiveLaw => f.choices().join(", "),
+            Kind::Choice(_) => f.choices().join(", "),
+            Kind::AdhesiveLaw => crate::contact::LawKind::known(),
         };
         let default = if f.required {
             "required".to_string()

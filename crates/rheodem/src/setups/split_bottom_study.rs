@@ -15,8 +15,9 @@
 //! "cohesion.volume" = [14e-12, 75e-12, 200e-12]
 //! ```
 
-use super::split_bottom::{Cohesion, SplitBottomRun, SplitBottomSpec, Stage};
+use super::split_bottom::{SplitBottomRun, SplitBottomSpec, Stage};
 use super::sweep::{PointStatus, point_tables};
+use crate::contact::LawKind;
 use crate::driver::Progress;
 use crate::io::atomic::write_atomic;
 use crate::run::{RunError, io_err};
@@ -26,27 +27,31 @@ use std::path::{Path, PathBuf};
 /// The name of a point's directory, from its controls: the law and its parameters, `Ω`,
 /// `g` and the seed (`willett-g0.02-v75-omega0.5-g9.81-s1`; volumes in nl).
 pub fn point_name(spec: &SplitBottomSpec) -> String {
-    let law = match spec.cohesion {
-        Cohesion::Dry => "dry".to_string(),
-        Cohesion::Willett {
-            surface_tension,
-            volume,
-            contact_angle_deg,
-        } => {
-            let angle = if contact_angle_deg == 20.0 {
+    let c = &spec.cohesion;
+    let value = |key: &str| c.value(key).unwrap_or(f64::NAN);
+    let law = match c.law {
+        LawKind::None => "dry".to_string(),
+        LawKind::LiquidBridge => {
+            let angle = value("contact_angle_deg");
+            let angle = if angle == 20.0 {
                 String::new()
             } else {
-                format!("-theta{contact_angle_deg}")
+                format!("-theta{angle}")
             };
             format!(
-                "willett-g{surface_tension}-v{}{angle}",
-                (volume * 1e12 * 1e6).round() / 1e6
+                "willett-g{}-v{}{angle}",
+                value("surface_tension"),
+                (value("volume") * 1e12 * 1e6).round() / 1e6
             )
         }
-        Cohesion::Linear {
-            max_force,
-            stiffness,
-        } => format!("linear-f{max_force:e}-k{stiffness}"),
+        LawKind::LinearIrreversible => {
+            format!("linear-f{:e}-k{}", value("max_force"), value("stiffness"))
+        }
+        // Any other law: its name and its values in key order.
+        other => std::iter::once(other.name().replace('_', "-"))
+            .chain(c.values.iter().map(|(k, v)| format!("{k}{v}")))
+            .collect::<Vec<_>>()
+            .join("-"),
     };
     format!("{law}-omega{}-g{}-s{}", spec.omega, spec.gravity, spec.seed)
 }
@@ -191,11 +196,10 @@ mod tests {
             ]
         );
         // Grid keys combine in name order, the last varying fastest.
-        assert!(matches!(
-            points[2].1.cohesion,
-            Cohesion::Willett { surface_tension, volume, .. }
-                if surface_tension == 0.04 && (volume - 14e-12).abs() < 1e-24
-        ));
+        let law = &points[2].1.cohesion;
+        assert_eq!(law.law, LawKind::LiquidBridge);
+        assert_eq!(law.value("surface_tension"), Some(0.04));
+        assert!((law.value("volume").expect("a volume") - 14e-12).abs() < 1e-24);
         let twice = [base.clone(), base.clone()];
         let e = expand(&base, &toml::Table::new(), &twice).expect_err("duplicate");
         assert!(e.to_string().contains("duplicates"), "{e}");

@@ -10,9 +10,10 @@
 //! `θ = 20°` (the papers' Eq. 23).
 
 use super::phase_diagram::{Figure, Group, group_figure};
-use super::split_bottom::{Cohesion, Groups, SplitBottomSpec};
+use super::split_bottom::{Groups, SplitBottomSpec};
 use super::split_bottom_fields::BandSummary;
 use crate::analysis::Estimate;
+use crate::contact::LawKind;
 use crate::fit::least_squares;
 use crate::plot::Labels;
 use serde::Deserialize;
@@ -199,23 +200,30 @@ impl WetRun {
             .ok_or_else(|| format!("{name}: no wall torque"))?;
         let (d, fg) = (s.spec.diameter, s.groups.weight);
         let stress = d * d / fg;
-        let (adhesion, tension) = match s.spec.cohesion {
-            Cohesion::Dry => (Adhesion::Dry, 0.0),
-            Cohesion::Willett {
-                volume,
-                surface_tension,
-                ..
-            } => (
+        let law = &s.spec.cohesion;
+        let value = |key: &str| {
+            law.value(key)
+                .ok_or_else(|| format!("{name}: law {} without its {key}", law.law))
+        };
+        let (adhesion, tension) = match law.law {
+            LawKind::None => (Adhesion::Dry, 0.0),
+            LawKind::LiquidBridge => (
                 Adhesion::Willett {
-                    volume,
-                    surface_tension,
+                    volume: value("volume")?,
+                    surface_tension: value("surface_tension")?,
                 },
                 s.groups.surface_tension_scaled,
             ),
-            Cohesion::Linear { max_force, .. } => (
+            LawKind::LinearIrreversible => (
                 Adhesion::Linear,
-                max_force / fg / (std::f64::consts::PI * 20f64.to_radians().cos()),
+                value("max_force")? / fg / (std::f64::consts::PI * 20f64.to_radians().cos()),
             ),
+            other => {
+                return Err(format!(
+                    "{name}: law {other} is not part of the wet study (dry, Willett or linear \
+                     irreversible)"
+                ));
+            }
         };
         Ok(WetRun {
             name,

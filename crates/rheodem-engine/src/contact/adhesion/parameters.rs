@@ -252,6 +252,17 @@ impl LawSpec {
     pub fn value(&self, key: &str) -> Option<f64> {
         self.values.get(key).copied()
     }
+
+    /// The same law with every default its parameters declare written out where no
+    /// value is given, so that the spec holds every value the law uses.
+    pub fn with_defaults(mut self) -> LawSpec {
+        for p in self.law.info().parameters {
+            if let Some(v) = p.default {
+                self.values.entry(p.key.to_string()).or_insert(v);
+            }
+        }
+        self
+    }
 }
 
 impl Serialize for LawSpec {

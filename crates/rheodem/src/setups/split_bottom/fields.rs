@@ -77,15 +77,16 @@ impl FieldSettings {
     }
 }
 
-/// The particle-scale constants of a spec for the local `I`, `p*` and `Bo`: `f_a^max` of
-/// a pair of mean particles.
-pub fn material(spec: &SplitBottomSpec) -> Material {
+/// The particle-scale constants of a run for the local `I`, `p*` and `Bo`: `f_a^max` of
+/// a pair of mean particles under the law the run uses (one law for every pair).
+pub fn material(run: &SplitBottomState) -> Material {
+    let spec = &run.spec;
     let a = 0.5 * spec.diameter;
     Material {
         diameter: spec.diameter,
         particle_density: spec.density,
         stiffness: spec.stiffness,
-        max_adhesion: spec.law().adhesion.max_force(a, a),
+        max_adhesion: run.simulation.laws.get(0, 0).adhesion.max_force(a, a),
     }
 }
 
@@ -133,7 +134,7 @@ pub fn write_outputs(
     sums: &CgSums,
     dir: &Path,
 ) -> Result<BandRheology, RunError> {
-    let points = fields(sums, Some(&material(&run.spec)));
+    let points = fields(sums, Some(&material(run)));
     let csv = dir.join("fields.csv");
     write_atomic(
         &csv,
@@ -416,7 +417,7 @@ fn compare_laws(mu_p: f64, points: &[RheologyPoint], p_min: f64) -> Option<LawCo
 
 /// The band and its rheology from `sums`' fields (Roy et al. 2016, Sects. 3.1–3.2).
 pub fn band_rheology(run: &SplitBottomState, sums: &CgSums) -> BandRheology {
-    band_of_fields(run, &sums.grid, &fields(sums, Some(&material(&run.spec))))
+    band_of_fields(run, &sums.grid, &fields(sums, Some(&material(run))))
 }
 
 /// The band and its rheology from the fields `points` on `grid`.

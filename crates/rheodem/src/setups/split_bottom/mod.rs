@@ -39,6 +39,6 @@ mod stages;
 mod state;
 
 pub use open::{MemoryLimit, Opened};
-pub use spec::{Cohesion, Geometry, Groups, SplitBottomSpec, TimeStepRule};
+pub use spec::{Geometry, Groups, SplitBottomSpec, TimeStepRule};
 pub use stages::SplitBottomRun;
 pub use state::{PARTS, Row, SLABS, SettleReport, ShearResults, SlabFit, SplitBottomState, Stage};

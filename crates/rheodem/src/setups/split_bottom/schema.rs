@@ -3,16 +3,24 @@
 //! [`SplitBottomSpec`], `mu_p` for its `friction`, and the adhesive law as `law` with its
 //! parameters, gathered into the spec's `cohesion` table.
 
-use super::spec::{Cohesion, SplitBottomSpec};
+use super::spec::SplitBottomSpec;
+use crate::contact::{LawKind, LawSpec};
 use crate::scenario::{ScenarioError, invalid};
 use crate::setups::schema::{Field, Range, SetUpSchema, Values, given, overlay, table_of};
 
-/// The names `law` accepts.
-const LAWS: &[&str] = &["dry", "willett", "linear"];
+/// The adhesive laws' parameters the cell takes as options: the option's key, the law's
+/// key, and the factor from the option's unit to the law's (volumes in nl).
+const LAW_OPTIONS: &[(&str, &str, f64)] = &[
+    ("surface_tension", "surface_tension", 1.0),
+    ("volume_nl", "volume", 1e-12),
+    ("contact_angle_deg", "contact_angle_deg", 1.0),
+    ("max_force", "max_force", 1.0),
+    ("adhesive_stiffness", "stiffness", 1.0),
+];
 
-/// The parameters of the Willett law, and those of the linear irreversible law.
-const WILLETT_KEYS: &[&str] = &["surface_tension", "volume_nl", "contact_angle_deg"];
-const LINEAR_KEYS: &[&str] = &["max_force", "adhesive_stiffness"];
+/// The Willett law's values where none is given: the papers' reference bridge
+/// (`γ_s` = 0.020 N/m, `V_b` = 75 nl; Roy et al. 2016).
+const WILLETT_DEFAULTS: &[(&str, f64)] = &[("surface_tension", 0.020), ("volume", 75e-12)];
 
 impl SetUpSchema for SplitBottomSpec {
     const NAME: &'static str = "split-bottom";
@@ -26,20 +34,16 @@ impl SetUpSchema for SplitBottomSpec {
             Range::AtLeast(0.0),
         ),
         Field::number("gravity", "m/s²", "Gravity g along −z", Range::AtLeast(0.0)),
-        Field::choice(
-            "law",
-            "Adhesive law between all particles and at the walls",
-            LAWS,
-        )
-        .note(" [default: dry, or the config's cohesion table]")
-        .by_set_up(),
+        Field::adhesive_law("law", "Adhesive law between all particles and at the walls")
+            .note(" [default: none, or the config's cohesion table]")
+            .by_set_up(),
         Field::number(
             "surface_tension",
             "N/m",
-            "Surface tension γ_s of the Willett law",
+            "Surface tension γ_s of the Willett law (liquid_bridge)",
             Range::Above(0.0),
         )
-        .note(" [default with law willett: 0.02]")
+        .note(" [default with law liquid_bridge: 0.02]")
         .by_set_up(),
         Field::number(
             "volume_nl",
@@ -49,7 +53,7 @@ impl SetUpSchema for SplitBottomSpec {
         )
         .note(
             " (0: attraction only while touching), with a rupture distance below the mean \
-             diameter [default with law willett: 75]",
+             diameter [default with law liquid_bridge: 75]",
         )
         .by_set_up(),
         Field::number(
@@ -58,23 +62,26 @@ impl SetUpSchema for SplitBottomSpec {
             "Contact angle θ of the Willett law",
             Range::AtLeast(0.0),
         )
-        .note(", below 90 [default with law willett: 20]")
+        .note(", below 90 [default with law liquid_bridge: 20]")
         .by_set_up(),
         Field::number(
             "max_force",
             "N",
-            "f_a^max of the linear irreversible law",
+            "Maximum adhesive force f_a^max of a linear law",
             Range::Above(0.0),
         )
-        .note(" (required with law linear)")
+        .note(" (required with law linear_irreversible or reversible)")
         .by_set_up(),
         Field::number(
             "adhesive_stiffness",
             "N/m",
-            "k_c of the linear irreversible law",
+            "Adhesive stiffness k_c of a linear law",
             Range::Above(0.0),
         )
-        .note(", with f_a^max/k_c below the mean diameter (required with law linear)")
+        .note(
+            ", with f_a^max/k_c below the mean diameter (required with law linear_irreversible \
+             or reversible, unless the config's cohesion table gives its range)",
+        )
         .by_set_up(),
         Field::number("mu_p", "", "Particle friction μ_p", Range::AtLeast(0.0))
             .stored_as("friction"),
@@ -253,75 +260,162 @@ impl SetUpSchema for SplitBottomSpec {
 }
 
 /// The adhesive law from `law` and its parameters in `values`, starting from the base
-/// spec's law `base` (a parameter not given keeps the base's value, or the papers' default).
-fn cohesion(base: Cohesion, values: &Values) -> Result<Cohesion, ScenarioError> {
-    let number = |key: &str| {
-        given(values, key).and_then(|v| v.as_float().or(v.as_integer().map(|i| i as f64)))
-    };
+/// spec's law `base`: the same law keeps the base's values where none is given, another
+/// starts from its own defaults (for the Willett law, the papers' reference bridge). Every
+/// default the law declares is written out, so that the spec holds every value the run
+/// uses; a parameter the law lacks, or one it needs and lacks, is an error naming it.
+fn cohesion(base: LawSpec, values: &Values) -> Result<LawSpec, ScenarioError> {
     let law = match given(values, "law").and_then(toml::Value::as_str) {
-        Some(name) => name,
-        None => match base {
-            Cohesion::Dry => "dry",
-            Cohesion::Willett { .. } => "willett",
-            Cohesion::Linear { .. } => "linear",
-        },
+        Some(name) => LawKind::from_name(name).map_err(|e| invalid("law", e.value, e.reason))?,
+        None => base.law,
     };
-    for (keys, owner) in [(WILLETT_KEYS, "willett"), (LINEAR_KEYS, "linear")] {
-        if let Some(key) = keys.iter().find(|k| given(values, k).is_some())
-            && law != owner
-        {
+    let mut spec = if law == base.law {
+        base
+    } else {
+        LawSpec::new(law, [])
+    };
+    let declared = law.info().parameters;
+    for (option, key, factor) in LAW_OPTIONS {
+        let Some(v) =
+            given(values, option).and_then(|v| v.as_float().or(v.as_integer().map(|i| i as f64)))
+        else {
+            continue;
+        };
+        if !declared.iter().any(|p| p.key == *key) {
+            let having: Vec<String> = crate::contact::adhesion::LAWS
+                .iter()
+                .filter(|l| l.parameters.iter().any(|p| p.key == *key))
+                .map(|l| format!("law = {}", l.name))
+                .collect();
             return Err(invalid(
-                *key,
-                given(values, key).map_or(String::new(), ToString::to_string),
+                *option,
+                v,
                 format!(
-                    "is a parameter of law {owner}, but the law is {law}: give law = {owner} or \
-                     leave {key} out"
+                    "is not a parameter of law {law}: give {} or leave {option} out",
+                    having.join(" or ")
                 ),
             ));
         }
+        spec.values.insert(key.to_string(), v * factor);
     }
-    Ok(match law {
-        "willett" => {
-            let (g0, v0, a0) = match base {
-                Cohesion::Willett {
-                    surface_tension,
-                    volume,
-                    contact_angle_deg,
-                } => (surface_tension, volume, contact_angle_deg),
-                _ => (0.020, 75e-12, 20.0),
-            };
-            Cohesion::Willett {
-                surface_tension: number("surface_tension").unwrap_or(g0),
-                volume: number("volume_nl").map_or(v0, |v| v * 1e-12),
-                contact_angle_deg: number("contact_angle_deg").unwrap_or(a0),
-            }
+    if law == LawKind::LiquidBridge {
+        for (key, v) in WILLETT_DEFAULTS {
+            spec.values.entry(key.to_string()).or_insert(*v);
         }
-        "linear" => {
-            let (f0, k0) = match base {
-                Cohesion::Linear {
-                    max_force,
-                    stiffness,
-                } => (Some(max_force), Some(stiffness)),
-                _ => (None, None),
-            };
-            match (
-                number("max_force").or(f0),
-                number("adhesive_stiffness").or(k0),
-            ) {
-                (Some(max_force), Some(stiffness)) => Cohesion::Linear {
-                    max_force,
-                    stiffness,
-                },
-                _ => {
-                    return Err(invalid(
-                        "law",
-                        "\"linear\"",
-                        "needs max_force and adhesive_stiffness (or both in the config's \
-                         cohesion table)",
-                    ));
-                }
-            }
-        }
-        _ => Cohesion::Dry,
-    })
+    }
+    let spec = spec.with_defaults();
+    // What the law needs and lacks (a parameter given instead of another counts for it).
+    let missing: Vec<&str> = declared
+        .iter()
+        .filter(|p| p.instead_of.is_none() && !spec.values.contains_key(p.key))
+        .filter(|p| {
+            !declared
+                .iter()
+                .any(|q| q.instead_of == Some(p.key) && spec.values.contains_key(q.key))
+        })
+        .map(|p| {
+            LAW_OPTIONS
+                .iter()
+                .find(|(_, key, _)| *key == p.key)
+                .map_or(p.key, |(option, _, _)| option)
+        })
+        .collect();
+    if !missing.is_empty() {
+        return Err(invalid(
+            "law",
+            format!("\"{law}\""),
+            format!(
+                "needs {} (as options, or in the config's cohesion table)",
+                missing.join(" and ")
+            ),
+        ));
+    }
+    Ok(spec)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use toml::Value;
+
+    fn spec(config: &str, values: &[(&'static str, Value)]) -> Result<SplitBottomSpec, String> {
+        let base: toml::Table = toml::from_str(config).expect("TOML");
+        SplitBottomSpec::from_values(base, &values.to_vec()).map_err(|e| e.to_string())
+    }
+
+    /// The names of earlier files are aliases; a law's defaults are written out; options
+    /// land under the law's keys in its units; a law named anew starts from its defaults.
+    #[test]
+    fn the_law_is_a_registered_law_with_its_parameters() {
+        let old = "cohesion = { law = \"willett\", surface_tension = 0.04, volume = 14e-12 }";
+        let s = spec(old, &[]).expect("an earlier config");
+        assert_eq!(s.cohesion.law, LawKind::LiquidBridge);
+        assert_eq!(s.cohesion.value("contact_angle_deg"), Some(20.0));
+        assert_eq!(s.cohesion.value("surface_tension"), Some(0.04));
+        // Written back under the registered name.
+        assert!(
+            s.to_toml().contains("law = \"liquid_bridge\""),
+            "{}",
+            s.to_toml()
+        );
+        // An option overrides one value and keeps the others.
+        let s = spec(old, &[("volume_nl", Value::Float(75.0))]).expect("a volume");
+        assert_eq!(s.cohesion.value("surface_tension"), Some(0.04));
+        assert!((s.cohesion.value("volume").expect("volume") - 75e-12).abs() < 1e-24);
+        // Named by option with nothing else: the papers' reference bridge.
+        let s = spec("", &[("law", Value::String("willett".into()))]).expect("Willett");
+        assert_eq!(s.cohesion.value("surface_tension"), Some(0.02));
+        assert_eq!(s.cohesion.value("volume"), Some(75e-12));
+        // Another law than the config's starts from its own values.
+        let s = spec(
+            old,
+            &[
+                ("law", Value::String("reversible".into())),
+                ("max_force", Value::Float(1e-4)),
+                ("adhesive_stiffness", Value::Float(1e3)),
+            ],
+        )
+        .expect("reversible");
+        assert_eq!(s.cohesion.law, LawKind::Reversible);
+        assert_eq!(s.cohesion.values.len(), 2, "{:?}", s.cohesion.values);
+        assert_eq!(s.cohesion.value("stiffness"), Some(1e3));
+        // A linear law's range from the config instead of its stiffness.
+        let s = spec(
+            "cohesion = { law = \"linear\", max_force = 1e-4, range = 1e-4 }",
+            &[],
+        )
+        .expect("a range instead of the stiffness");
+        assert_eq!(s.cohesion.law, LawKind::LinearIrreversible);
+        assert_eq!(s.law().expect("the law").range(), 1e-4);
+    }
+
+    /// What a law lacks or does not have is named, with what to give instead.
+    #[test]
+    fn a_parameter_the_law_lacks_or_needs_is_named() {
+        let e = spec("", &[("surface_tension", Value::Float(0.02))]).expect_err("dry");
+        assert!(
+            e.contains("`surface_tension` = 0.02: is not a parameter of law none")
+                && e.contains("give law = liquid_bridge or leave surface_tension out"),
+            "{e}"
+        );
+        let e = spec(
+            "",
+            &[
+                ("law", Value::String("willett".into())),
+                ("max_force", Value::Float(1e-4)),
+            ],
+        )
+        .expect_err("Willett has no f_max");
+        assert!(
+            e.contains("give law = reversible or law = linear_irreversible"),
+            "{e}"
+        );
+        let e = spec("", &[("law", Value::String("reversible".into()))]).expect_err("bare");
+        assert!(
+            e.contains("`law` = \"reversible\": needs max_force and adhesive_stiffness"),
+            "{e}"
+        );
+        let e = spec("cohesion = { law = \"dry\", volume = 1e-12 }", &[]).expect_err("a key");
+        assert!(e.contains("cohesion"), "{e}");
+    }
 }

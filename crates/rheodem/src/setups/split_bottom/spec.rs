@@ -3,7 +3,7 @@
 //! random filling of the mould.
 
 use crate::cg::KernelShape;
-use crate::contact::{Adhesion, ContactLaw, Damping, LawKind, LawSpec, NormalLaw, Resistance};
+use crate::contact::{ContactLaw, Damping, LawKind, LawSpec, NormalLaw, Resistance};
 use crate::generate::Rng;
 use crate::memory::{self, Bytes};
 use crate::neighbor::min_wedge_angle;
@@ -14,36 +14,6 @@ use rand::RngExt;
 use rustc_hash::FxHashMap;
 use serde::{Deserialize, Serialize};
 use std::f64::consts::PI;
-
-/// The adhesive law between all particles (and at the walls).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
-#[serde(tag = "law", rename_all = "kebab-case", deny_unknown_fields)]
-pub enum Cohesion {
-    /// Dry, non-cohesive.
-    #[default]
-    Dry,
-    /// Willett liquid bridges (docs/model.md §2.5).
-    Willett {
-        /// Surface tension `γ_s` (N/m).
-        surface_tension: f64,
-        /// Bridge volume `V_b` (m³).
-        volume: f64,
-        /// Contact angle `θ` (degrees).
-        #[serde(default = "default_contact_angle")]
-        contact_angle_deg: f64,
-    },
-    /// Linear irreversible adhesion (docs/model.md §2.6).
-    Linear {
-        /// Maximum adhesive force `f_a^max` (N).
-        max_force: f64,
-        /// Stiffness `k_c` of the separation branch (N/m).
-        stiffness: f64,
-    },
-}
-
-fn default_contact_angle() -> f64 {
-    20.0
-}
 
 /// How the time step is chosen.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
@@ -90,7 +60,7 @@ pub struct SplitBottomSpec {
     /// `γ_t / γ_n`.
     pub damping_ratio: f64,
     /// The adhesive law.
-    pub cohesion: Cohesion,
+    pub cohesion: LawSpec,
     /// Angular velocity `Ω` of the outer parts (rad/s).
     pub omega: f64,
     /// Gravitational acceleration `g` (m/s²), along `−z`.
@@ -151,7 +121,7 @@ impl Default for SplitBottomSpec {
             friction: 0.01,
             stiffness_ratio: 2.0 / 7.0,
             damping_ratio: 2.0 / 7.0,
-            cohesion: Cohesion::Dry,
+            cohesion: LawSpec::default(),
             omega: 0.5,
             gravity: 9.81,
             time_step: TimeStepRule::Shortest,
@@ -249,8 +219,11 @@ impl SplitBottomSpec {
     /// A spec from a TOML table (a study point); the error names the offending key's path
     /// in the table.
     pub fn from_table(table: toml::Table) -> Result<SplitBottomSpec, ScenarioError> {
-        serde_path_to_error::deserialize(toml::Value::Table(table))
-            .map_err(|e| ScenarioError::Parse(format!("key `{}`: {}", e.path(), e.inner())))
+        let mut spec: SplitBottomSpec = serde_path_to_error::deserialize(toml::Value::Table(table))
+            .map_err(|e| ScenarioError::Parse(format!("key `{}`: {}", e.path(), e.inner())))?;
+        // The law's defaults written out (a Willett table without its contact angle).
+        spec.cohesion = spec.cohesion.with_defaults();
+        Ok(spec)
     }
 
     /// The spec as TOML.
@@ -259,31 +232,19 @@ impl SplitBottomSpec {
     }
 
     /// The contact law of every pair (particles and walls).
-    pub fn law(&self) -> ContactLaw {
+    ///
+    /// # Errors
+    /// [`ScenarioError`] naming the `cohesion` parameter its law refuses.
+    pub fn law(&self) -> Result<ContactLaw, ScenarioError> {
         let damping = Damping {
             fixed: self.damping,
             ..Damping::NONE
         };
-        let adhesion = match self.cohesion {
-            Cohesion::Dry => Adhesion::None,
-            Cohesion::Willett {
-                surface_tension,
-                volume,
-                contact_angle_deg,
-            } => Adhesion::LiquidBridge(crate::contact::LiquidBridge {
-                surface_tension,
-                contact_angle: contact_angle_deg.to_radians(),
-                volume,
-            }),
-            Cohesion::Linear {
-                max_force,
-                stiffness,
-            } => Adhesion::LinearIrreversible(crate::contact::LinearIrreversible {
-                max_force,
-                stiffness,
-            }),
-        };
-        ContactLaw {
+        let adhesion = self
+            .cohesion
+            .build()
+            .map_err(|e| law_error("cohesion", e))?;
+        Ok(ContactLaw {
             normal: NormalLaw {
                 stiffness: self.stiffness,
                 damping,
@@ -297,50 +258,23 @@ impl SplitBottomSpec {
             rolling: Resistance::NONE,
             torsion: Resistance::NONE,
             adhesion,
-        }
-    }
-
-    /// The adhesive law by its registered name with its parameters, as the engine's
-    /// registry checks and builds it.
-    pub fn law_spec(&self) -> LawSpec {
-        match self.cohesion {
-            Cohesion::Dry => LawSpec::default(),
-            Cohesion::Willett {
-                surface_tension,
-                volume,
-                contact_angle_deg,
-            } => LawSpec::new(
-                LawKind::LiquidBridge,
-                [
-                    ("surface_tension", surface_tension),
-                    ("contact_angle_deg", contact_angle_deg),
-                    ("volume", volume),
-                ],
-            ),
-            Cohesion::Linear {
-                max_force,
-                stiffness,
-            } => LawSpec::new(
-                LawKind::LinearIrreversible,
-                [("max_force", max_force), ("stiffness", stiffness)],
-            ),
-        }
+        })
     }
 
     /// Checks the adhesive law's values, and that its interaction range (the rupture
     /// distance `S_c`) stays below the mean diameter `d` (m): a longer range lets a bridge
     /// reach past a particle's neighbours, outside the laws' validity (docs/model.md §2.5).
     fn check_cohesion(&self, d: f64) -> Result<(), ScenarioError> {
-        let range_key = match self.cohesion {
-            Cohesion::Dry => return Ok(()),
-            Cohesion::Willett { volume, .. } => ("cohesion.volume", volume),
-            Cohesion::Linear { stiffness, .. } => ("cohesion.stiffness", stiffness),
-        };
         // The values against the bounds the law declares in the registry.
-        self.law_spec()
-            .build()
-            .map_err(|e| law_error("cohesion", e))?;
-        let range = self.law().range();
+        let range = self.law()?.range();
+        // The key that sets the range: the bridge volume, or the linear laws' stiffness
+        // (or the range given instead of it).
+        let Some(range_key) = ["volume", "stiffness", "range"]
+            .into_iter()
+            .find_map(|k| self.cohesion.value(k).map(|v| (format!("cohesion.{k}"), v)))
+        else {
+            return Ok(());
+        };
         if !(range.is_finite() && range <= d) {
             return Err(invalid(
                 range_key.0,
@@ -401,7 +335,7 @@ impl SplitBottomSpec {
                 ),
             ));
         }
-        let range = self.law().range();
+        let range = self.law()?.range();
         let mould_inner = inner - 0.5 * d;
         let mould_outer = outer + 0.5 * d;
         let floor = -0.5 * d;
@@ -493,10 +427,8 @@ impl SplitBottomSpec {
     /// Dimensionless groups for the time step `dt` (s).
     pub fn groups(&self, g: &Geometry, dt: f64) -> Groups {
         let weight = self.density * PI / 6.0 * self.diameter.powi(3) * self.gravity;
-        let surface_tension = match self.cohesion {
-            Cohesion::Willett {
-                surface_tension, ..
-            } => surface_tension,
+        let surface_tension = match self.cohesion.law {
+            LawKind::LiquidBridge => self.cohesion.value("surface_tension").unwrap_or(0.0),
             _ => 0.0,
         };
         let pressure = self.density * SETTLED_FRACTION * self.gravity * 0.5 * g.height;

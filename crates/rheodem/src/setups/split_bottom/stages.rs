@@ -142,7 +142,7 @@ impl SplitBottomState {
             };
             particles.push(sphere, spec.density);
         }
-        let law = spec.law();
+        let law = spec.law()?;
         let mut laws = ContactTable::uniform(1, law);
         let walls = backstops(&geometry);
         let dt = time_step(&spec, &particles, &laws, &walls)?;
@@ -232,7 +232,7 @@ impl SplitBottomState {
     /// Starts the shear stage: the laws of the spec (no extra damping), the outer parts
     /// rotating at `Ω`, empty profiles.
     fn begin_shear(&mut self) -> Result<(), RunError> {
-        let law = self.spec.law();
+        let law = self.spec.law()?;
         let sim = &mut self.simulation;
         sim.laws = ContactTable::uniform(1, law);
         if law.range() > sim.neighbors.range {
