@@ -1,20 +1,18 @@
 //! `rheodem study`: run a study here, or on a Slurm cluster, follow its progress, gather
 //! its points into its database, and report on it (docs/studies.md).
 
-use crate::shear::{run_sweep, sweep_dirs};
+use crate::shear::sweep_dirs;
 use anyhow::{Context, Result, bail};
 use rheodem::io::atomic::write_atomic;
 use rheodem::run::RunError;
-use rheodem::setups::archive::{archive_point, refresh_table};
+use rheodem::setups::registry::{SetUpInfo, study_points};
 use rheodem::setups::results_db::ResultsDb;
-use rheodem::setups::shear_box::ShearBoxSpec;
+use rheodem::setups::runner::{Event, Finished, RunOptions};
+use rheodem::setups::schema::Values;
 use rheodem::setups::slurm::{self, SUBMISSION_FILE, SlurmOptions, Submission};
-use rheodem::setups::split_bottom::SplitBottomSpec;
-use rheodem::setups::split_bottom_study;
-use rheodem::setups::study::{SetUp, StudySpec};
-use rheodem::setups::sweep::{
-    PointResult, PointStatus, SweepSpec, expand, run_point, sweep_status,
-};
+use rheodem::setups::studied;
+use rheodem::setups::study::StudySpec;
+use rheodem::setups::sweep::PointStatus;
 use std::path::{Path, PathBuf};
 
 /// The `study` subcommands (docs/studies.md).
@@ -117,39 +115,20 @@ pub enum StudyCommand {
     },
 }
 
-/// A status without what the finished point gave.
-fn strip<R>(st: PointStatus<R>) -> PointStatus<()> {
-    match st {
-        PointStatus::Finished(_) => PointStatus::Finished(()),
-        PointStatus::Running(x) => PointStatus::Running(x),
-        PointStatus::Stopped(x) => PointStatus::Stopped(x),
-        PointStatus::Failed(x, e) => PointStatus::Failed(x, e),
-        PointStatus::Waiting => PointStatus::Waiting,
-    }
-}
-
-/// The points of a study's variant, by set-up.
-enum Points {
-    /// Shear-box points.
-    ShearBox(Vec<(String, ShearBoxSpec)>),
-    /// Split-bottom points.
-    SplitBottom(Vec<(String, SplitBottomSpec)>),
-}
-
-/// A study file read with its sweep for one variant.
+/// A study file read for one variant, with the points of its set-up.
 struct Loaded {
     /// The study file, absolute.
     file: PathBuf,
     /// The study.
     study: StudySpec,
-    /// The variant's output directory, archive and tables.
-    sweep: SweepSpec,
     /// The variant's name (the file's stem, `-quick` for the quick variant).
     name: String,
     /// Whether this is the quick variant.
     quick: bool,
-    /// The variant's points.
-    points: Points,
+    /// The registered set-up of its points.
+    setup: &'static SetUpInfo,
+    /// The variant's points: name and spec table.
+    points: Vec<(String, toml::Table)>,
     /// Where the points run.
     out: PathBuf,
     /// The archive of finished points, if the variant keeps one.
@@ -164,22 +143,20 @@ impl Loaded {
             .with_context(|| format!("cannot resolve {}", file.display()))?;
         let study =
             StudySpec::from_toml(&text).map_err(|e| anyhow::anyhow!("{}: {e}", file.display()))?;
+        let (setup, points) =
+            study_points(&study, quick).map_err(|e| anyhow::anyhow!("{}: {e}", file.display()))?;
         let sweep = study
             .variant(quick)
             .map_err(|e| anyhow::anyhow!("{}: {e}", file.display()))?;
         let stem = file
             .file_stem()
             .map_or("study".into(), |s| s.to_string_lossy().into_owned());
-        let points = match study.setup {
-            SetUp::ShearBox => Points::ShearBox(expand(&sweep)?),
-            SetUp::SplitBottom => Points::SplitBottom(study.split_bottom_points(quick)?),
-        };
         let (out, archive) = sweep_dirs(&sweep, &file);
         Ok(Loaded {
             study,
-            sweep,
             name: if quick { format!("{stem}-quick") } else { stem },
             quick,
+            setup,
             points,
             out,
             archive,
@@ -198,66 +175,78 @@ impl Loaded {
 
     /// The points' names, in order.
     fn names(&self) -> Vec<&str> {
-        match &self.points {
-            Points::ShearBox(p) => p.iter().map(|(n, _)| n.as_str()).collect(),
-            Points::SplitBottom(p) => p.iter().map(|(n, _)| n.as_str()).collect(),
-        }
+        self.points.iter().map(|(n, _)| n.as_str()).collect()
     }
 
-    /// Every point's status (what a finished point gave left out).
-    fn status(&self) -> Vec<PointStatus<()>> {
-        match &self.points {
-            Points::ShearBox(p) => sweep_status(p, &self.out, self.archive.as_deref())
-                .into_iter()
-                .map(strip)
-                .collect(),
-            Points::SplitBottom(p) => self.cell_status(p).into_iter().map(strip).collect(),
-        }
+    /// The status of the point `name` (spec table `table`); a finished point gives its
+    /// result file.
+    fn point_status(&self, name: &str, table: &toml::Table) -> PointStatus<PathBuf> {
+        (self.setup.study.status)(table, name, &self.out.join(name), self.archive.as_deref())
     }
 
-    /// The status of split-bottom points: archived, or from their directories.
-    fn cell_status(&self, points: &[(String, SplitBottomSpec)]) -> Vec<PointStatus<PathBuf>> {
-        points
+    /// Every point's status.
+    fn status(&self) -> Vec<PointStatus<PathBuf>> {
+        self.points
             .iter()
-            .map(|(name, spec)| {
-                match self
-                    .archive
-                    .as_deref()
-                    .and_then(|a| split_bottom_study::archived(a, name, spec))
-                {
-                    Some(file) => PointStatus::Finished(file),
-                    None => split_bottom_study::point_status(&self.out.join(name), spec),
-                }
-            })
+            .map(|(name, table)| self.point_status(name, table))
             .collect()
     }
 
-    /// The finished shear-box points.
-    fn finished(&self) -> Vec<PointResult> {
-        let Points::ShearBox(p) = &self.points else {
-            return Vec::new();
-        };
-        sweep_status(p, &self.out, self.archive.as_deref())
-            .into_iter()
-            .filter_map(|s| match s {
-                PointStatus::Finished(r) => Some(*r),
-                _ => None,
-            })
-            .collect()
+    /// The finished points: name and result file.
+    fn finished(&self) -> Vec<(String, PathBuf)> {
+        studied::finished(&self.points, &self.status())
     }
 
-    /// The finished split-bottom points: name and `summary.json`.
-    fn finished_cells(&self) -> Vec<(String, PathBuf)> {
-        let Points::SplitBottom(p) = &self.points else {
-            return Vec::new();
-        };
-        p.iter()
-            .zip(self.cell_status(p))
-            .filter_map(|((name, _), st)| match st {
-                PointStatus::Finished(file) => Some((name.clone(), file)),
-                _ => None,
-            })
-            .collect()
+    /// Archives the finished point `name` (unless its result is the archive's already)
+    /// and stores it in the database `db`.
+    fn keep(&self, name: &str, result: &Path, db: Option<&mut ResultsDb>) -> Result<()> {
+        if let Some(a) = &self.archive
+            && !result.starts_with(a)
+        {
+            (self.setup.study.archive)(a, name, result).map_err(|e| anyhow::anyhow!(e))?;
+        }
+        if let Some(db) = db {
+            (self.setup.study.store)(db, &self.name, name, result)
+                .map_err(|e| anyhow::anyhow!(e))?;
+        }
+        Ok(())
+    }
+}
+
+/// Runs (or resumes) the point `name` (spec table `table`) of `s` in its directory with
+/// `threads` threads of the current pool, through the registry as `rheodem <set-up>`
+/// would; returns its result file and what the run says of itself (its report and
+/// warnings). Progress goes to standard error every 10 % unless `quiet`.
+fn run_point(
+    s: &Loaded,
+    name: &str,
+    table: &toml::Table,
+    threads: usize,
+    quiet: bool,
+) -> Result<(PathBuf, Finished), RunError> {
+    let dir = s.out.join(name);
+    let options = RunOptions {
+        dir: &dir,
+        threads,
+        force: false,
+        from: None,
+        max_memory: None,
+    };
+    let mut last = (None, 0);
+    let finished = (s.setup.run)(table.clone(), &Values::new(), &options, &mut |e| {
+        if let Event::Progress(p) = e {
+            let pct = p.done * 100 / p.total.max(1);
+            if !quiet && (last.0 != Some(p.stage) || pct >= last.1 + 10) {
+                last = (Some(p.stage), pct);
+                eprintln!("  {name}: {} {pct} %", p.stage);
+            }
+        }
+    })?;
+    match s.point_status(name, table) {
+        PointStatus::Finished(file) => Ok((file, finished)),
+        other => Err(RunError::OtherCommand(format!(
+            "{name} ran to its end but is not finished ({other})"
+        ))),
     }
 }
 
@@ -269,20 +258,7 @@ pub fn study(cmd: StudyCommand) -> Result<()> {
             quick,
             jobs,
             quiet,
-        } => {
-            let s = Loaded::new(&file, quick)?;
-            match &s.points {
-                Points::ShearBox(_) => run_sweep(
-                    &s.sweep,
-                    &s.file,
-                    &s.name,
-                    jobs,
-                    quiet,
-                    s.database().as_deref(),
-                ),
-                Points::SplitBottom(points) => run_cells(&s, points, jobs, quiet),
-            }
-        }
+        } => run_points(&Loaded::new(&file, quick)?, jobs, quiet),
         StudyCommand::Submit {
             file,
             quick,
@@ -324,22 +300,9 @@ pub fn study(cmd: StudyCommand) -> Result<()> {
 fn report(s: &Loaded) -> Result<()> {
     let total = s.names().len();
     let variant = if s.quick { "quick" } else { "full" };
-    let (report, done) = match &s.points {
-        Points::ShearBox(_) => {
-            let finished = s.finished();
-            (
-                rheodem::setups::study::report(&s.study, variant, total, &finished),
-                finished.len(),
-            )
-        }
-        Points::SplitBottom(_) => {
-            let finished = s.finished_cells();
-            (
-                rheodem::setups::study::split_bottom_report(&s.study, variant, total, &finished),
-                finished.len(),
-            )
-        }
-    };
+    let finished = s.finished();
+    let done = finished.len();
+    let report = (s.setup.study.report)(&s.study, variant, total, &finished);
     let report =
         report.map_err(|e| anyhow::anyhow!("cannot build the report of {}: {e}", s.name))?;
     let dir = s.out.join("report");
@@ -362,61 +325,33 @@ fn report(s: &Loaded) -> Result<()> {
     Ok(())
 }
 
-/// Runs (or resumes) the point `name` of the study with `threads` threads.
+/// Runs (or resumes) the point `name` of the study with `threads` threads, then archives
+/// it and prints its outcome (what a cluster's array task does).
 fn run_one(s: &Loaded, name: &str, threads: usize) -> Result<()> {
-    let missing = || {
+    let table = studied::point(&s.points, name).ok_or_else(|| {
         anyhow::anyhow!(
             "{} has no point named {name:?} (`rheodem study status {} --points` lists them)",
             s.file.display(),
             s.file.display()
         )
-    };
+    })?;
+    if let PointStatus::Finished(result) = s.point_status(name, table)
+        && s.archive.as_ref().is_some_and(|a| result.starts_with(a))
+    {
+        println!("{name}: finished already (archived)");
+        return Ok(());
+    }
     let (pool, n) = crate::pool(Some(threads))?;
-    let dir = s.out.join(name);
-    let outcome = match &s.points {
-        Points::ShearBox(points) => {
-            let (_, spec) = points.iter().find(|(n, _)| n == name).ok_or_else(missing)?;
-            let archive = s.archive.as_deref();
-            if archive.is_some_and(|a| rheodem::setups::archive::archived(a, name, spec).is_some())
-            {
-                println!("{name}: finished already (archived)");
-                return Ok(());
+    match pool.install(|| run_point(s, name, table, n, false)) {
+        Ok((result, finished)) => {
+            s.keep(name, &result, None)?;
+            print!("{}", finished.report);
+            for w in &finished.warnings {
+                eprintln!("warning: {w}");
             }
-            let mut last = 0;
-            pool.install(|| {
-                run_point(name, spec, &dir, n, &mut |done, total| {
-                    let pct = done * 100 / total.max(1);
-                    if pct >= last + 10 {
-                        last = pct;
-                        eprintln!("  {name}: {pct} %");
-                    }
-                })
-            })
-            .map(|r| {
-                if let Some(a) = &s.archive {
-                    archive_point(a, &r)?;
-                }
-                let (text, warnings) = r.report(&dir);
-                print!("{text}");
-                for w in warnings {
-                    eprintln!("warning: {w}");
-                }
-                Ok::<(), anyhow::Error>(())
-            })
+            println!("{}", (s.setup.study.outcome)(name, &result));
+            Ok(())
         }
-        Points::SplitBottom(points) => {
-            let (_, spec) = points.iter().find(|(n, _)| n == name).ok_or_else(missing)?;
-            let archive = s.archive.as_deref();
-            if archive.is_some_and(|a| split_bottom_study::archived(a, name, spec).is_some()) {
-                println!("{name}: finished already (archived)");
-                return Ok(());
-            }
-            pool.install(|| run_cell(name, spec, &dir, archive))
-                .map(|()| Ok(()))
-        }
-    };
-    match outcome {
-        Ok(done) => done,
         Err(RunError::Busy(_)) => {
             println!("{name}: being run by another process; left to it");
             Ok(())
@@ -425,73 +360,55 @@ fn run_one(s: &Loaded, name: &str, threads: usize) -> Result<()> {
     }
 }
 
-/// Runs (or resumes) one split-bottom point in `dir` with the current pool, archives it
-/// and prints its torque and cohesion.
-fn run_cell(
-    name: &str,
-    spec: &SplitBottomSpec,
-    dir: &Path,
-    archive: Option<&Path>,
-) -> Result<(), RunError> {
-    let mut last = (None, 0);
-    let summary = split_bottom_study::run_point(spec, dir, &mut |p| {
-        let pct = p.done * 100 / p.total.max(1);
-        if last.0 != Some(p.stage) || pct >= last.1 + 10 {
-            last = (Some(p.stage), pct);
-            eprintln!("  {name}: {} {pct} %", p.stage);
-        }
-    })?;
-    if let Some(a) = archive {
-        split_bottom_study::archive_point(a, name, &summary)?;
-    }
-    match rheodem::setups::wet_study::WetRun::read_summary(&summary, name) {
-        Ok(r) => println!(
-            "{name}: μ = {:.4} ± {:.4}, c* = {:.3} ± {:.3}, T* = {:.4e}",
-            r.mu.0, r.mu.1, r.cohesion.0, r.cohesion.1, r.torque.0
-        ),
-        Err(e) => println!("{name}: finished ({e})"),
-    }
-    Ok(())
-}
-
-/// Runs the missing split-bottom points, `jobs` at a time with one thread each.
-fn run_cells(
-    s: &Loaded,
-    points: &[(String, SplitBottomSpec)],
-    jobs: Option<usize>,
-    quiet: bool,
-) -> Result<()> {
+/// Runs the study's missing points, `jobs` at a time with one thread each; each finished
+/// point is archived and stored in the study's database at once.
+fn run_points(s: &Loaded, jobs: Option<usize>, quiet: bool) -> Result<()> {
     let jobs = crate::worker_count(
         "--jobs",
         jobs.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get())),
     )?;
     std::fs::create_dir_all(&s.out)
         .with_context(|| format!("cannot create {}", s.out.display()))?;
+    let todo: Vec<&(String, toml::Table)> = s
+        .points
+        .iter()
+        .filter(|(name, table)| !matches!(s.point_status(name, table), PointStatus::Finished(_)))
+        .collect();
     eprintln!(
-        "{} split-bottom points, {jobs} at a time → {}",
-        points.len(),
+        "{} {} points, {} to run, {jobs} at a time → {}",
+        s.points.len(),
+        s.setup.name,
+        todo.len(),
         s.out.display()
     );
+    let database = s
+        .database()
+        .map(|db| ResultsDb::open(&db))
+        .transpose()?
+        .map(std::sync::Mutex::new);
     let errors = std::sync::Mutex::new(Vec::new());
-    let pool_errors = crate::for_each_point(points.len(), jobs, |k, pool| {
-        let (name, spec) = &points[k];
-        let archive = s.archive.as_deref();
-        if archive.is_some_and(|a| split_bottom_study::archived(a, name, spec).is_some()) {
-            return;
-        }
-        let dir = s.out.join(name);
-        match pool.install(|| run_cell(name, spec, &dir, archive)) {
-            Ok(()) => {
-                // Each finished cell goes into the study's database at once.
-                let stored = s.database().map(|db| {
-                    ResultsDb::open(&db)
-                        .and_then(|mut d| d.insert_cell(&s.name, name, &dir.join("summary.json")))
-                });
-                if let Some(Err(e)) = stored {
-                    errors
-                        .lock()
-                        .map(|mut v| v.push(format!("{name}: {e}")))
-                        .ok();
+    let fail = |name: &str, e: String| {
+        errors
+            .lock()
+            .map(|mut v| v.push(format!("{name}: {e}")))
+            .ok();
+    };
+    let pool_errors = crate::for_each_point(todo.len(), jobs, |k, pool| {
+        let (name, table) = todo[k];
+        match pool.install(|| run_point(s, name, table, 1, quiet)) {
+            Ok((result, _)) => {
+                // One point at a time keeps the archive and the database.
+                let kept = match &database {
+                    Some(d) => match d.lock() {
+                        Ok(mut db) => s.keep(name, &result, Some(&mut db)),
+                        Err(_) => Err(anyhow::anyhow!("database lock poisoned")),
+                    },
+                    None => s.keep(name, &result, None),
+                };
+                match kept {
+                    Ok(()) if !quiet => println!("{}", (s.setup.study.outcome)(name, &result)),
+                    Ok(()) => {}
+                    Err(e) => fail(name, format!("{e:#}")),
                 }
             }
             Err(RunError::Busy(_)) => {
@@ -499,17 +416,15 @@ fn run_cells(
                     eprintln!("  {name}: being run by another process; skipped");
                 }
             }
-            Err(e) => {
-                errors
-                    .lock()
-                    .map(|mut v| v.push(format!("{name}: {e}")))
-                    .ok();
-            }
+            Err(e) => fail(name, e.to_string()),
         }
     });
     errors.lock().map(|mut v| v.extend(pool_errors)).ok();
-    let done = s.finished_cells().len();
-    println!("{done} of {} points finished", points.len());
+    println!(
+        "{} of {} points finished",
+        s.finished().len(),
+        s.points.len()
+    );
     let errors = errors.into_inner().unwrap_or_default();
     if !errors.is_empty() {
         bail!("{} errors:\n{}", errors.len(), errors.join("\n"));
@@ -517,56 +432,27 @@ fn run_cells(
     Ok(())
 }
 
-/// Stores every finished point in the study's database and refreshes its archive's table.
+/// Archives and stores in the study's database every finished point (what the collect
+/// job of a cluster submission does).
 fn collect(s: &Loaded) -> Result<()> {
-    if let Points::SplitBottom(_) = s.points {
-        let cells = s.finished_cells();
-        match s.database() {
-            Some(db) => {
-                let mut database = ResultsDb::open(&db)?;
-                for (name, summary) in &cells {
-                    database.insert_cell(&s.name, name, summary)?;
-                }
-                println!(
-                    "{} of {} cells finished; {} stored under study {:?} in {}",
-                    cells.len(),
-                    s.names().len(),
-                    database.count_cells(Some(&s.name))?,
-                    s.name,
-                    db.display()
-                );
-            }
-            None => println!(
-                "{} of {} cells finished; the study names no database to store them in",
-                cells.len(),
-                s.names().len()
-            ),
-        }
-        return Ok(());
-    }
     let finished = s.finished();
-    if let Some(a) = s.archive.as_deref().filter(|a| a.is_dir()) {
-        refresh_table(a)?;
+    let mut database = s.database().map(|db| ResultsDb::open(&db)).transpose()?;
+    for (name, result) in &finished {
+        s.keep(name, result, database.as_mut())?;
     }
-    match s.database() {
-        Some(db) => {
-            let mut database = ResultsDb::open(&db)?;
-            for r in &finished {
-                database.insert(&s.name, r)?;
-            }
-            println!(
-                "{} of {} points finished; {} stored under study {:?} in {}",
-                finished.len(),
-                s.names().len(),
-                database.count(Some(&s.name))?,
-                s.name,
-                db.display()
-            );
-        }
-        None => println!(
+    match (&database, s.database()) {
+        (Some(db), Some(file)) => println!(
+            "{} of {} points finished; {} stored under study {:?} in {}",
+            finished.len(),
+            s.points.len(),
+            db.count_runs(s.setup.name, Some(&s.name))?,
+            s.name,
+            file.display()
+        ),
+        _ => println!(
             "{} of {} points finished; the study names no database to store them in",
             finished.len(),
-            s.names().len()
+            s.points.len()
         ),
     }
     Ok(())
@@ -688,7 +574,7 @@ fn submit(s: &Loaded, opts: &SlurmOptions, rheodem: Option<PathBuf>, dry_run: bo
 /// Prints how far the study is.
 fn status(s: &Loaded, list: bool) -> Result<()> {
     let status = s.status();
-    let count = |f: fn(&PointStatus<()>) -> bool| status.iter().filter(|st| f(st)).count();
+    let count = |f: fn(&PointStatus<PathBuf>) -> bool| status.iter().filter(|st| f(st)).count();
     let finished = count(|s| matches!(s, PointStatus::Finished(_)));
     println!("{}: {finished} of {} points finished", s.name, status.len());
     println!(
@@ -748,10 +634,7 @@ fn status(s: &Loaded, list: bool) -> Result<()> {
     }
     if let Some(db) = s.database().filter(|d| d.exists()) {
         let database = ResultsDb::open(&db)?;
-        let stored = match s.points {
-            Points::ShearBox(_) => database.count(Some(&s.name))?,
-            Points::SplitBottom(_) => database.count_cells(Some(&s.name))?,
-        };
+        let stored = database.count_runs(s.setup.name, Some(&s.name))?;
         println!("  database {}: {stored} points of {}", db.display(), s.name);
     }
     Ok(())

@@ -675,17 +675,13 @@ fn shipped_studies_are_valid_and_have_quick_variants() {
         let text = std::fs::read_to_string(&path).expect("readable");
         let study = rheodem::setups::study::StudySpec::from_toml(&text)
             .unwrap_or_else(|e| panic!("{}: {e}", path.display()));
-        let quick = match study.setup {
-            rheodem::setups::study::SetUp::ShearBox => {
-                rheodem::setups::sweep::expand(&study.sweep(true).expect("quick variant"))
-                    .expect("points")
-                    .len()
-            }
-            rheodem::setups::study::SetUp::SplitBottom => study
-                .split_bottom_points(true)
-                .expect("quick variant")
-                .len(),
-        };
+        // Both variants expand to valid points of a registered set-up.
+        rheodem::setups::registry::study_points(&study, false)
+            .unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+        let quick = rheodem::setups::registry::study_points(&study, true)
+            .unwrap_or_else(|e| panic!("{}: quick variant: {e}", path.display()))
+            .1
+            .len();
         assert!(quick <= 10, "{}: {quick} quick points", path.display());
         n += 1;
     }

@@ -18,6 +18,7 @@ pub mod split_bottom;
 /// The split-bottom cell's fields, under their former path.
 pub use split_bottom::fields as split_bottom_fields;
 pub mod split_bottom_study;
+pub mod studied;
 pub mod study;
 pub mod sweep;
 pub mod wet_study;

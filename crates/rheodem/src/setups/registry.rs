@@ -7,8 +7,10 @@ use super::runner::{Event, Experiment, Finished, RunOptions};
 use super::schema::{Field, SetUpSchema, Values, markdown};
 use super::shear_box::ShearBoxSpec;
 use super::split_bottom::SplitBottomSpec;
+use super::studied::{PointTables, Studied, StudyFns};
+use super::study::StudySpec;
 use crate::run::RunError;
-use crate::scenario::ScenarioError;
+use crate::scenario::{ScenarioError, invalid};
 
 /// What the registry holds about a set-up.
 #[derive(Clone, Copy, Debug)]
@@ -31,6 +33,8 @@ pub struct SetUpInfo {
     /// Makes the spec of a base table and values ([`SetUpSchema::from_values`]) and runs
     /// it ([`Experiment::run`]), in the caller's thread pool.
     pub run: RunFn,
+    /// What studies of it need ([`Studied`]), each point as its spec's table.
+    pub study: StudyFns,
 }
 
 /// How [`SetUpInfo::run`] is called: the base table (a config file's, or empty), the
@@ -55,7 +59,7 @@ fn run<S: Experiment>(
     S::from_values(base, values)?.run(options, events)
 }
 
-const fn info<S: Experiment>() -> SetUpInfo {
+const fn info<S: Studied>() -> SetUpInfo {
     SetUpInfo {
         name: S::NAME,
         summary: S::SUMMARY,
@@ -65,6 +69,7 @@ const fn info<S: Experiment>() -> SetUpInfo {
         from: S::FROM,
         estimates_memory: S::ESTIMATES_MEMORY,
         run: run::<S>,
+        study: StudyFns::of::<S>(),
     }
 }
 
@@ -77,6 +82,21 @@ pub fn find(name: &str) -> Result<&'static SetUpInfo, String> {
         let known: Vec<&str> = SETUPS.iter().map(|s| s.name).collect();
         format!("`{name}` is not a set-up; known: {}", known.join(", "))
     })
+}
+
+/// The set-up of `study` and the named points of its variant (`quick` or the full one),
+/// each its spec's table; an unknown set-up or a bad point is an error naming it.
+///
+/// # Errors
+/// [`ScenarioError`] for a `setup` that is not registered, a missing variant, or a point
+/// out of range.
+pub fn study_points(
+    study: &StudySpec,
+    quick: bool,
+) -> Result<(&'static SetUpInfo, PointTables), ScenarioError> {
+    let info = find(&study.setup).map_err(|e| invalid("setup", &study.setup, e))?;
+    let variant = study.variant(quick)?;
+    Ok((info, (info.study.points)(&variant)?))
 }
 
 impl SetUpInfo {
@@ -162,23 +182,34 @@ mod tests {
         );
     }
 
-    /// A study file's `setup` takes the name of every registered set-up, each a set-up of
-    /// its own.
+    /// A study file's `setup` takes the name of every registered set-up and gives its
+    /// points; another name is refused with the known ones.
     #[test]
     fn studies_take_every_registered_set_up() {
-        #[derive(serde::Deserialize)]
-        struct Study {
-            setup: crate::setups::study::SetUp,
+        for s in SETUPS {
+            // One point: the required values, each the smallest round number its range
+            // takes.
+            let mut text = format!(
+                "title = \"t\"\nsetup = \"{}\"\nout = \"o\"\n[[point]]\n",
+                s.name
+            );
+            for f in s.fields.iter().filter(|f| f.required) {
+                text.push_str(&format!("{} = 0.01\n", f.spec_key().unwrap_or(f.key)));
+            }
+            let study = StudySpec::from_toml(&text).expect("a study file");
+            let (info, points) = study_points(&study, false).expect("its points");
+            assert_eq!(info.name, s.name);
+            assert_eq!(points.len(), 1);
+            // The point's table reads back as a spec of the set-up, which accepts it.
+            (info.accepts)(points[0].1.clone(), &Values::new())
+                .unwrap_or_else(|e| panic!("{}: its point is refused: {e}", s.name));
         }
-        let mut kinds: Vec<String> = SETUPS
-            .iter()
-            .map(|s| {
-                let study: Study = toml::from_str(&format!("setup = \"{}\"", s.name))
-                    .unwrap_or_else(|e| panic!("a study cannot name {}: {e}", s.name));
-                format!("{:?}", study.setup)
-            })
-            .collect();
-        kinds.dedup();
-        assert_eq!(kinds.len(), SETUPS.len());
+        let study =
+            StudySpec::from_toml("title = \"t\"\nsetup = \"chute\"\nout = \"o\"").expect("parsed");
+        let e = study_points(&study, false).expect_err("no chute yet");
+        assert!(
+            e.to_string().contains("`setup` = chute") && e.to_string().contains("shear-box"),
+            "{e}"
+        );
     }
 }

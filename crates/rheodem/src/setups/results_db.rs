@@ -541,8 +541,12 @@ impl ResultsDb {
         self.store(study, &record)
     }
 
-    /// Number of stored runs of `setup` in `study` (in every study with `None`).
-    fn count_of(&self, setup: &str, study: Option<&str>) -> Result<u64, DbError> {
+    /// Number of stored runs of the set-up `setup` (its registered name) in `study` (in
+    /// every study with `None`).
+    ///
+    /// # Errors
+    /// [`DbError`] from the database.
+    pub fn count_runs(&self, setup: &str, study: Option<&str>) -> Result<u64, DbError> {
         self.connection
             .query_row(
                 "SELECT count(*) FROM runs WHERE setup = ?1 AND (?2 IS NULL OR study = ?2)",
@@ -555,12 +559,12 @@ impl ResultsDb {
 
     /// Number of stored split-bottom cells of `study` (of every study with `None`).
     pub fn count_cells(&self, study: Option<&str>) -> Result<u64, DbError> {
-        self.count_of("split-bottom", study)
+        self.count_runs("split-bottom", study)
     }
 
     /// Number of stored shear-box points of `study` (of every study with `None`).
     pub fn count(&self, study: Option<&str>) -> Result<u64, DbError> {
-        self.count_of("shear-box", study)
+        self.count_runs("shear-box", study)
     }
 
     /// The studies with stored runs, in name order.

@@ -10,15 +10,14 @@
 //! setup = "split-bottom"
 //! out = "runs/volumes"
 //! [base]
-//! cohesion = { law = "willett", surface_tension = 0.02, volume = 75e-12 }
+//! cohesion = { law = "liquid_bridge", surface_tension = 0.02, volume = 75e-12 }
 //! [grid]
 //! "cohesion.volume" = [14e-12, 75e-12, 200e-12]
 //! ```
 
-use super::split_bottom::{SplitBottomRun, SplitBottomSpec, Stage};
+use super::split_bottom::{SplitBottomSpec, Stage};
 use super::sweep::{PointStatus, point_tables};
 use crate::contact::LawKind;
-use crate::driver::Progress;
 use crate::io::atomic::write_atomic;
 use crate::run::{RunError, io_err};
 use crate::scenario::ScenarioError;
@@ -140,30 +139,6 @@ pub fn archive_point(archive: &Path, name: &str, summary: &Path) -> Result<(), R
     let text = std::fs::read(summary).map_err(io_err("read", summary))?;
     let file = archive.join(format!("{name}.json"));
     write_atomic(&file, &text).map_err(io_err("write", &file))
-}
-
-/// Runs (or resumes) the point `spec` in `dir` with the current rayon pool, returning its
-/// `summary.json` once done. A finished run is not run again; a run of other parameters
-/// in `dir` is an error ([`RunError::Mismatch`]).
-pub fn run_point(
-    spec: &SplitBottomSpec,
-    dir: &Path,
-    progress: &mut dyn FnMut(Progress),
-) -> Result<PathBuf, RunError> {
-    if let PointStatus::Finished(summary) = point_status(dir, spec) {
-        return Ok(summary);
-    }
-    let mut run = if dir.join("checkpoint.bin").exists() {
-        let run = SplitBottomRun::resume(dir)?;
-        if run.spec != *spec {
-            return Err(RunError::Mismatch(dir.to_path_buf()));
-        }
-        run
-    } else {
-        SplitBottomRun::start(spec.clone(), dir, false)?
-    };
-    run.advance_until(dir, u64::MAX, progress)?;
-    Ok(dir.join("summary.json"))
 }
 
 #[cfg(test)]

@@ -24,7 +24,7 @@
 
 use super::law_fits::fit_tables;
 use super::phase_diagram::{Figure, delta_phi_figures, delta_phi_points};
-use super::sweep::{PointResult, SweepSpec, expand};
+use super::sweep::{PointResult, SweepSpec};
 use crate::scenario::ScenarioError;
 use base64::Engine;
 use serde::Deserialize;
@@ -75,16 +75,8 @@ pub struct QuickSpec {
     pub point: Option<Vec<toml::Table>>,
 }
 
-/// The set-up a study's points run in.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize)]
-#[serde(rename_all = "kebab-case")]
-pub enum SetUp {
-    /// The stress-controlled shear box: points are [`super::shear_box::ShearBoxSpec`]s.
-    #[default]
-    ShearBox,
-    /// The split-bottom cell: points are [`super::split_bottom::SplitBottomSpec`]s, reported
-    /// by [`super::wet_study`].
-    SplitBottom,
+fn default_setup() -> String {
+    "shear-box".into()
 }
 
 /// A study file.
@@ -93,9 +85,10 @@ pub enum SetUp {
 pub struct StudySpec {
     /// Title of the report.
     pub title: String,
-    /// The set-up of every point (`shear-box`, the default, or `split-bottom`).
-    #[serde(default)]
-    pub setup: SetUp,
+    /// The registered set-up of every point (`shear-box`, the default, `split-bottom`, …;
+    /// its points come from `setups::registry::study_points`).
+    #[serde(default = "default_setup")]
+    pub setup: String,
     /// Output directory (relative to the study file); the quick variant's gets `-quick`.
     pub out: String,
     /// Archive of finished points (relative to the study file), as in a sweep file.
@@ -122,45 +115,10 @@ pub struct StudySpec {
 }
 
 impl StudySpec {
-    /// Reads a study file's text; the error names the offending key.
+    /// Reads a study file's text; the error names the offending key. Its points are
+    /// checked when they are expanded (`setups::registry::study_points`).
     pub fn from_toml(text: &str) -> Result<StudySpec, ScenarioError> {
-        let spec: StudySpec =
-            toml::from_str(text).map_err(|e| ScenarioError::Parse(e.to_string()))?;
-        let variants: &[bool] = if spec.quick.is_some() {
-            &[false, true]
-        } else {
-            &[false]
-        };
-        for &quick in variants {
-            match spec.setup {
-                SetUp::ShearBox => {
-                    spec.sweep(quick)?;
-                }
-                SetUp::SplitBottom => {
-                    spec.split_bottom_points(quick)?;
-                }
-            }
-        }
-        Ok(spec)
-    }
-
-    /// The points of a split-bottom study's variant, named.
-    pub fn split_bottom_points(
-        &self,
-        quick: bool,
-    ) -> Result<Vec<(String, super::split_bottom::SplitBottomSpec)>, ScenarioError> {
-        let v = self.variant(quick)?;
-        super::split_bottom_study::expand(&v.base, &v.grid, &v.point)
-    }
-
-    /// The sweep of the full study or of its quick variant. The quick variant writes to the
-    /// output directory with the suffix `-quick` and keeps no archive, so that its points
-    /// never mix with the full ones (its finished points are still found in its own
-    /// directory and not run again).
-    pub fn sweep(&self, quick: bool) -> Result<SweepSpec, ScenarioError> {
-        let sweep = self.variant(quick)?;
-        expand(&sweep)?;
-        Ok(sweep)
+        toml::from_str(text).map_err(|e| ScenarioError::Parse(e.to_string()))
     }
 
     /// The variant's output directory, archive and point tables, as a sweep file holds
@@ -331,6 +289,7 @@ pub fn report_html(r: &Report, title: &str) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::setups::sweep::expand;
 
     const STUDY: &str = r#"
 title = "tiny"
@@ -350,12 +309,12 @@ grid = { mu_p = [0.01] }
     #[test]
     fn the_quick_variant_is_smaller_and_kept_apart() {
         let s = StudySpec::from_toml(STUDY).expect("valid");
-        let full = expand(&s.sweep(false).expect("full")).expect("points");
-        let quick = expand(&s.sweep(true).expect("quick")).expect("points");
+        let full = expand(&s.variant(false).expect("full")).expect("points");
+        let quick = expand(&s.variant(true).expect("quick")).expect("points");
         assert_eq!((full.len(), quick.len()), (2, 1));
         assert_eq!(quick[0].1.particles, 256);
         assert_eq!(quick[0].1.strain, 2.0);
-        let q = s.sweep(true).expect("quick");
+        let q = s.variant(true).expect("quick");
         assert_eq!(q.out.as_deref(), Some("runs/tiny-quick"));
         assert_eq!(q.results, None);
         let e = StudySpec::from_toml(&STUDY.replace("[quick]", "[quick]\nsize = 1"))
@@ -363,7 +322,7 @@ grid = { mu_p = [0.01] }
         assert!(e.to_string().contains("size"), "{e}");
         let no_quick =
             StudySpec::from_toml(&STUDY[..STUDY.find("[quick]").expect("has")]).expect("valid");
-        assert!(no_quick.sweep(true).is_err());
+        assert!(no_quick.variant(true).is_err());
     }
 
     #[test]

@@ -364,24 +364,6 @@ pub fn point_status(dir: &Path, spec: Option<&ShearBoxSpec>) -> PointStatus {
     }
 }
 
-/// The status of every point of a sweep whose points run in `out`, archived (if at all) in
-/// `archive`: a point archived with its parameters is finished wherever it ran.
-pub fn sweep_status(
-    points: &[(String, ShearBoxSpec)],
-    out: &Path,
-    archive: Option<&Path>,
-) -> Vec<PointStatus> {
-    points
-        .iter()
-        .map(
-            |(name, spec)| match archive.and_then(|a| super::archive::archived(a, name, spec)) {
-                Some(r) => PointStatus::Finished(Box::new(r)),
-                None => point_status(&out.join(name), Some(spec)),
-            },
-        )
-        .collect()
-}
-
 /// Default output directory of a sweep file: `runs/<file name>` beside the file.
 pub fn default_out(path: &Path) -> PathBuf {
     let stem = path

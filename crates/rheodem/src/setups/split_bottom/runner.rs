@@ -1,6 +1,8 @@
 //! The split-bottom cell as an [`Experiment`]: the run directory opened by
 //! [`SplitBottomRun::open`], then every stage run to its end, with a warning where settling
-//! ended at its time limit.
+//! ended at its time limit; and in studies ([`Studied`]): its points named by their
+//! controls, its result file `summary.json`, its report with the relations of Roy et al.
+//! 2016.
 
 use super::open::MemoryLimit;
 use super::spec::SplitBottomSpec;
@@ -8,8 +10,15 @@ use super::stages::SplitBottomRun;
 use super::state::Stage;
 use crate::analysis::Estimate;
 use crate::run::{RunError, io_err};
+use crate::scenario::ScenarioError;
+use crate::setups::results_db::ResultsDb;
 use crate::setups::runner::{Event, Experiment, Finished, RunOptions};
+use crate::setups::split_bottom_study as study_points;
+use crate::setups::studied::Studied;
+use crate::setups::study::{Report, StudySpec};
+use crate::setups::sweep::{PointStatus, SweepSpec};
 use std::fmt::Write;
+use std::path::{Path, PathBuf};
 
 impl Experiment for SplitBottomSpec {
     const FROM: Option<&'static str> = Some(
@@ -80,7 +89,7 @@ impl Experiment for SplitBottomSpec {
 }
 
 /// The finished run in words: time, wall time, net torque and balance, the band per slab.
-fn report(run: &SplitBottomRun, dir: &std::path::Path) -> String {
+fn report(run: &SplitBottomRun, dir: &Path) -> String {
     let res = run.results();
     let show = |e: &Option<Estimate>| {
         e.map_or("n/a".to_string(), |e| {
@@ -108,4 +117,45 @@ fn report(run: &SplitBottomRun, dir: &std::path::Path) -> String {
     }
     let _ = writeln!(text, "outputs in {}", dir.display());
     text
+}
+
+impl Studied for SplitBottomSpec {
+    fn points(variant: &SweepSpec) -> Result<Vec<(String, Self)>, ScenarioError> {
+        study_points::expand(&variant.base, &variant.grid, &variant.point)
+    }
+
+    fn status(&self, name: &str, dir: &Path, archive: Option<&Path>) -> PointStatus<PathBuf> {
+        match archive.and_then(|a| study_points::archived(a, name, self)) {
+            Some(file) => PointStatus::Finished(file),
+            None => study_points::point_status(dir, self),
+        }
+    }
+
+    fn archive(archive: &Path, name: &str, result: &Path) -> Result<(), String> {
+        study_points::archive_point(archive, name, result).map_err(|e| e.to_string())
+    }
+
+    fn store(db: &mut ResultsDb, study: &str, name: &str, result: &Path) -> Result<(), String> {
+        db.insert_cell(study, name, result)
+            .map_err(|e| e.to_string())
+    }
+
+    fn report(
+        study: &StudySpec,
+        variant: &str,
+        total: usize,
+        finished: &[(String, PathBuf)],
+    ) -> Result<Report, String> {
+        crate::setups::study::split_bottom_report(study, variant, total, finished)
+    }
+
+    fn outcome(name: &str, result: &Path) -> String {
+        match crate::setups::wet_study::WetRun::read_summary(result, name) {
+            Ok(r) => format!(
+                "{name}: μ = {:.4} ± {:.4}, c* = {:.3} ± {:.3}, T* = {:.4e}",
+                r.mu.0, r.mu.1, r.cohesion.0, r.cohesion.1, r.torque.0
+            ),
+            Err(e) => format!("{name}: finished ({e})"),
+        }
+    }
 }
