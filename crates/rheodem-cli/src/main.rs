@@ -62,8 +62,11 @@ enum Command {
     /// Compare the finished points of a sweep directory with the laws fitted by Shi et al.
     /// 2020 (markdown table; docs/model.md §8–9).
     Compare {
-        /// The sweep's output directory (or its results archive).
-        dir: PathBuf,
+        /// The sweep's output directory (or its results archive); with several, a point
+        /// of a later directory replaces the point of the same name of an earlier one
+        /// (e.g. a longer run of it).
+        #[arg(required = true)]
+        dirs: Vec<PathBuf>,
         /// Also write the validation figures (SVG: φ and μ against Bo, I and p*, with the
         /// paper's laws) into this directory.
         #[arg(long)]
@@ -75,8 +78,10 @@ enum Command {
     /// Fit the laws of Shi et al. 2020 to the finished points of a sweep directory, per μ_p
     /// and shear dynamics, in the layout of the paper's Tables 3, 5, 7 and 8 (markdown).
     Fit {
-        /// The sweep's output directory (or its results archive).
-        dir: PathBuf,
+        /// The sweep's output directory (or its results archive); with several, a point
+        /// of a later directory replaces the point of the same name of an earlier one.
+        #[arg(required = true)]
+        dirs: Vec<PathBuf>,
     },
     /// The wet split-bottom study of Roy et al. 2016 over finished split-bottom runs: c*
     /// against the rupture distance and the surface tension, torques, with the papers'
@@ -238,7 +243,7 @@ fn dispatch(cli: Cli) -> Result<()> {
         Command::Resume(args) => scenario_run::resume(args),
         Command::Contact(cmd) => contact::run(cmd),
         Command::Predict(args) => predict::run(&args),
-        Command::Fit { dir } => shear::fit(&dir),
+        Command::Fit { dirs } => shear::fit(&dirs),
         Command::WetStudy { dirs, figures, mu } => wet_study::run(&dirs, figures.as_deref(), mu),
         Command::Sweep {
             file,
@@ -248,7 +253,7 @@ fn dispatch(cli: Cli) -> Result<()> {
         } => shear::sweep(&file, jobs, quiet, db.as_deref()),
         Command::Db(cmd) => shear::db(cmd),
         Command::Study(cmd) => study::study(cmd),
-        Command::Compare { dir, figures } => shear::compare(&dir, figures.as_deref()),
+        Command::Compare { dirs, figures } => shear::compare(&dirs, figures.as_deref()),
         Command::Check(args) => scenario_run::check(args),
         Command::Setups(args) => setups::run(&args),
         Command::Bench(args) => bench::run(args),

@@ -226,10 +226,36 @@ fn load_results(dir: &Path) -> Result<(Vec<PointResult>, Vec<String>)> {
     Ok((finished, running))
 }
 
-/// Runs `compare`: the validation table of a sweep directory, plus the progress of the
-/// points still running; with `figures`, the validation figures written there as SVG.
-pub fn compare(dir: &Path, figures: Option<&Path>) -> Result<()> {
-    let (finished, running) = load_results(dir)?;
+/// The finished points of several sweep directories or archives, a point of a later one
+/// replacing the point of the same name of an earlier one, and the progress lines of the
+/// points still running in any (unless finished in another).
+fn load_merged(dirs: &[PathBuf]) -> Result<(Vec<PointResult>, Vec<String>)> {
+    let mut finished: Vec<PointResult> = Vec::new();
+    let mut running = Vec::new();
+    for dir in dirs {
+        let (done, going) = load_results(dir)?;
+        for r in done {
+            match finished.iter_mut().find(|f| f.name == r.name) {
+                Some(f) => *f = r,
+                None => finished.push(r),
+            }
+        }
+        running.extend(going);
+    }
+    // A point finished anywhere is not listed as running.
+    running.retain(|line: &String| {
+        !finished
+            .iter()
+            .any(|r| line.starts_with(&format!("- `{}`:", r.name)))
+    });
+    Ok((finished, running))
+}
+
+/// Runs `compare`: the validation table of sweep directories (merged as by
+/// [`load_merged`]), plus the progress of the points still running; with `figures`, the
+/// validation figures written there as SVG.
+pub fn compare(dirs: &[PathBuf], figures: Option<&Path>) -> Result<()> {
+    let (finished, running) = load_merged(dirs)?;
     print!(
         "{}",
         rheodem::setups::compare::comparison_markdown(&finished)
@@ -260,10 +286,11 @@ pub fn compare(dir: &Path, figures: Option<&Path>) -> Result<()> {
     Ok(())
 }
 
-/// Runs `fit`: the laws of Shi et al. 2020 fitted to the finished points of a sweep
-/// directory, per `μ_p` and shear dynamics, in the layout of the paper's tables (markdown).
-pub fn fit(dir: &Path) -> Result<()> {
-    let (finished, running) = load_results(dir)?;
+/// Runs `fit`: the laws of Shi et al. 2020 fitted to the finished points of sweep
+/// directories (merged as by [`load_merged`]), per `μ_p` and shear dynamics, in the
+/// layout of the paper's tables (markdown).
+pub fn fit(dirs: &[PathBuf]) -> Result<()> {
+    let (finished, running) = load_merged(dirs)?;
     print!("{}", rheodem::setups::law_fits::fit_tables(&finished));
     if !running.is_empty() {
         println!("\nNot finished (left out):\n{}", running.join("\n"));

@@ -717,3 +717,48 @@ fn setups_lists_the_set_ups_and_their_parameters() {
         "{err}"
     );
 }
+
+/// `compare` and `fit` over several directories: a later directory's point replaces the
+/// point of the same name (the validation's two points rerun to 60 strain units), so the
+/// table shows the long run, steady and passing, where the first directory alone shows the
+/// 15-strain run flagged not steady; the fit changes with it.
+#[test]
+fn later_directories_replace_points_of_the_same_name() {
+    let results = workspace().join("validation/results");
+    let long = workspace().join("validation/results-long");
+    let (results, long) = (
+        results.to_string_lossy().into_owned(),
+        long.to_string_lossy().into_owned(),
+    );
+    let row = |args: &[&str]| {
+        let out = rheodem(args);
+        assert!(out.status.success(), "{args:?}: {out:?}");
+        String::from_utf8_lossy(&out.stdout)
+            .lines()
+            .find(|l| l.starts_with("| 0.01 | 0.15 | 0.005 | 0 | none |"))
+            .map(str::to_string)
+            .expect("the point's row")
+    };
+    let alone = row(&["compare", &results]);
+    assert!(
+        alone.contains("5.0–15.0") && alone.ends_with("MISS not steady |"),
+        "{alone}"
+    );
+    let merged = row(&["compare", &results, &long]);
+    assert!(
+        merged.contains("20.0–60.0") && merged.ends_with("pass |"),
+        "{merged}"
+    );
+    let fit = |args: &[&str]| String::from_utf8_lossy(&rheodem(args).stdout).into_owned();
+    let (before, after) = (fit(&["fit", &results]), fit(&["fit", &results, &long]));
+    assert!(
+        before.contains("| 0.01 | this work (lab) | 0.65233"),
+        "{before}"
+    );
+    assert!(
+        after.contains("| 0.01 | this work (lab) | 0.65192"),
+        "{after}"
+    );
+    let out = rheodem(&["fit"]);
+    assert!(!out.status.success(), "a directory is required");
+}
