@@ -122,11 +122,12 @@ enum Command {
 fn main() -> ExitCode {
     // The derived subcommands, and one per registered set-up after `run` and `resume`.
     let matches = setup_run::with_set_ups(Cli::command(), 2).get_matches();
-    let outcome = match matches.subcommand() {
-        Some((name, m)) if let Ok(info) = rheodem::setups::registry::find(name) => {
-            setup_run::run(info, m)
-        }
-        _ => Cli::from_arg_matches(&matches)
+    let set_up = matches
+        .subcommand()
+        .and_then(|(name, m)| Some((rheodem::setups::registry::find(name).ok()?, m)));
+    let outcome = match set_up {
+        Some((info, m)) => setup_run::run(info, m),
+        None => Cli::from_arg_matches(&matches)
             .map_err(|e| e.exit())
             .and_then(dispatch),
     };

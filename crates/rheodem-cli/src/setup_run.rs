@@ -167,7 +167,12 @@ pub fn run(info: &SetUpInfo, m: &ArgMatches) -> Result<()> {
     if let Some(p) = &progress {
         p.finish();
     }
-    let finished = finished?;
+    let finished = finished.map_err(|e| match e {
+        rheodem::run::RunError::Mismatch(_) => {
+            anyhow::anyhow!("{e}; or pass --force to start it over with the new settings")
+        }
+        other => other.into(),
+    })?;
     print!("{}", finished.report);
     for w in &finished.warnings {
         eprintln!("warning: {w}");

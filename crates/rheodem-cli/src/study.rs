@@ -83,8 +83,8 @@ pub enum StudyCommand {
         #[arg(long, default_value_t = 1)]
         threads: usize,
     },
-    /// Store every finished point of the study in its database and refresh its archive's
-    /// table (what the collect job of a cluster submission does).
+    /// Archive every finished point of the study not archived yet and store every one in
+    /// its database (what the collect job of a cluster submission does).
     Collect {
         /// The study file (TOML).
         file: PathBuf,
@@ -335,10 +335,11 @@ fn run_one(s: &Loaded, name: &str, threads: usize) -> Result<()> {
             s.file.display()
         )
     })?;
-    if let PointStatus::Finished(result) = s.point_status(name, table)
-        && s.archive.as_ref().is_some_and(|a| result.starts_with(a))
-    {
-        println!("{name}: finished already (archived)");
+    // A finished point is not opened again: archived if it is not yet.
+    if let PointStatus::Finished(result) = s.point_status(name, table) {
+        s.keep(name, &result, None)?;
+        println!("{name}: finished already");
+        println!("{}", (s.setup.study.outcome)(name, &result));
         return Ok(());
     }
     let (pool, n) = crate::pool(Some(threads))?;
@@ -356,7 +357,21 @@ fn run_one(s: &Loaded, name: &str, threads: usize) -> Result<()> {
             println!("{name}: being run by another process; left to it");
             Ok(())
         }
-        Err(e) => Err(e.into()),
+        Err(e) => bail!("{}", in_study(e)),
+    }
+}
+
+/// A point's run error as a study says it: a directory of other settings is replaced by
+/// removing it (a study has no `--force`).
+fn in_study(e: RunError) -> String {
+    match e {
+        RunError::Changed { dir, changes } => format!(
+            "{} holds a run with other settings than the study's point ({}): remove the \
+             directory to run the point with the study's settings",
+            dir.display(),
+            changes.join("; ")
+        ),
+        other => other.to_string(),
     }
 }
 
@@ -369,11 +384,14 @@ fn run_points(s: &Loaded, jobs: Option<usize>, quiet: bool) -> Result<()> {
     )?;
     std::fs::create_dir_all(&s.out)
         .with_context(|| format!("cannot create {}", s.out.display()))?;
-    let todo: Vec<&(String, toml::Table)> = s
-        .points
-        .iter()
-        .filter(|(name, table)| !matches!(s.point_status(name, table), PointStatus::Finished(_)))
-        .collect();
+    let mut todo: Vec<&(String, toml::Table)> = Vec::new();
+    let mut done: Vec<(&str, PathBuf)> = Vec::new();
+    for point in &s.points {
+        match s.point_status(&point.0, &point.1) {
+            PointStatus::Finished(result) => done.push((&point.0, result)),
+            _ => todo.push(point),
+        }
+    }
     eprintln!(
         "{} {} points, {} to run, {jobs} at a time → {}",
         s.points.len(),
@@ -393,6 +411,20 @@ fn run_points(s: &Loaded, jobs: Option<usize>, quiet: bool) -> Result<()> {
             .map(|mut v| v.push(format!("{name}: {e}")))
             .ok();
     };
+    // Points finished before (by an earlier run killed before it kept them, or by a
+    // cluster task) are archived if they are not yet, and stored (again) in the database.
+    for (name, result) in &done {
+        let kept = match &database {
+            Some(d) => match d.lock() {
+                Ok(mut db) => s.keep(name, result, Some(&mut db)),
+                Err(_) => Err(anyhow::anyhow!("database lock poisoned")),
+            },
+            None => s.keep(name, result, None),
+        };
+        if let Err(e) = kept {
+            fail(name, format!("{e:#}"));
+        }
+    }
     let pool_errors = crate::for_each_point(todo.len(), jobs, |k, pool| {
         let (name, table) = todo[k];
         match pool.install(|| run_point(s, name, table, 1, quiet)) {
@@ -416,7 +448,7 @@ fn run_points(s: &Loaded, jobs: Option<usize>, quiet: bool) -> Result<()> {
                     eprintln!("  {name}: being run by another process; skipped");
                 }
             }
-            Err(e) => fail(name, e.to_string()),
+            Err(e) => fail(name, in_study(e)),
         }
     });
     errors.lock().map(|mut v| v.extend(pool_errors)).ok();

@@ -627,6 +627,20 @@ fn a_split_bottom_study_runs_and_reports() {
         .and_then(|m| m.modified())
         .expect("still archived");
     assert_eq!(first, again, "a finished point was run again");
+    // A point finished in its directory but missing from the archive (a run killed before
+    // it archived it) is archived by the next `study run`, without running it.
+    let summary = dir.join("runs/cells/willett-g0.02-v75-omega1-g9.81-s1/summary.json");
+    let ran = std::fs::metadata(&summary)
+        .and_then(|m| m.modified())
+        .expect("its summary");
+    std::fs::remove_file(&archived).expect("remove the archived copy");
+    let out = rheodem(&["study", "run", &f, "--quiet"]);
+    assert!(out.status.success());
+    assert!(archived.exists(), "the finished point was not archived");
+    let still = std::fs::metadata(&summary)
+        .and_then(|m| m.modified())
+        .expect("its summary");
+    assert_eq!(ran, still, "a finished point was opened again");
     let out = rheodem(&["study", "status", &f]);
     assert!(
         String::from_utf8_lossy(&out.stdout).contains("cells: 2 of 2 points finished"),

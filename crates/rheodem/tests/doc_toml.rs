@@ -11,6 +11,7 @@
 
 use rheodem::scenario::spec::PreparationSpec;
 use rheodem::scenario::{Scenario, build};
+use rheodem::setups::registry::study_points;
 use rheodem::setups::shear_box::ShearBoxSpec;
 use rheodem::setups::study::StudySpec;
 use rheodem::setups::sweep::{SweepSpec, expand};
@@ -152,7 +153,19 @@ fn check_block(text: &str) -> Result<&'static str, String> {
         Err(e) => why.push(format!("not a sweep: {e}")),
     }
     match StudySpec::from_toml(text) {
-        Ok(_) => return Ok("study"),
+        Ok(s) => {
+            // Both variants expand to valid points of a registered set-up.
+            let variants: &[bool] = if s.quick.is_some() {
+                &[false, true]
+            } else {
+                &[false]
+            };
+            for &quick in variants {
+                study_points(&s, quick)
+                    .map_err(|e| format!("a study whose points do not validate: {e}"))?;
+            }
+            return Ok("study");
+        }
         Err(e) => why.push(format!("not a study: {e}")),
     }
     match toml::from_str::<ShearBoxSpec>(text) {

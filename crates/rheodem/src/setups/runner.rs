@@ -2,7 +2,8 @@
 //!
 //! A set-up that implements [`Experiment`] (besides its [`SetUpSchema`]) is run from its
 //! checked spec: the directory is opened (an unfinished run of the same settings resumes,
-//! one of other settings is refused naming each changed key unless `force`), every stage
+//! one of other settings is refused unless `force`, naming each changed key where the
+//! directory records its settings), every stage
 //! runs to its end, and the outcome comes back as the run's summary (the JSON object of
 //! its `summary.json` or result file), a short report in words and its warnings. The
 //! command line builds one subcommand per registered set-up on this, and a library caller

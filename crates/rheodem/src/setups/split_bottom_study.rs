@@ -43,10 +43,11 @@ pub fn point_name(spec: &SplitBottomSpec) -> String {
                 (value("volume") * 1e12 * 1e6).round() / 1e6
             )
         }
-        LawKind::LinearIrreversible => {
+        LawKind::LinearIrreversible if c.value("stiffness").is_some() => {
             format!("linear-f{:e}-k{}", value("max_force"), value("stiffness"))
         }
-        // Any other law: its name and its values in key order.
+        // Any other law (or a linear one given by its range): its name and its values in
+        // key order.
         other => std::iter::once(other.name().replace('_', "-"))
             .chain(c.values.iter().map(|(k, v)| format!("{k}{v}")))
             .collect::<Vec<_>>()

@@ -264,7 +264,7 @@ impl SetUpSchema for SplitBottomSpec {
 /// starts from its own defaults (for the Willett law, the papers' reference bridge). Every
 /// default the law declares is written out, so that the spec holds every value the run
 /// uses; a parameter the law lacks, or one it needs and lacks, is an error naming it.
-fn cohesion(base: LawSpec, values: &Values) -> Result<LawSpec, ScenarioError> {
+pub(super) fn cohesion(base: LawSpec, values: &Values) -> Result<LawSpec, ScenarioError> {
     let law = match given(values, "law").and_then(toml::Value::as_str) {
         Some(name) => LawKind::from_name(name).map_err(|e| invalid("law", e.value, e.reason))?,
         None => base.law,
@@ -295,6 +295,16 @@ fn cohesion(base: LawSpec, values: &Values) -> Result<LawSpec, ScenarioError> {
                     having.join(" or ")
                 ),
             ));
+        }
+        // The option replaces the base's value and whatever the law takes instead of it
+        // (a linear law's range for its stiffness, or the other way round).
+        let replaced = declared.iter().filter_map(|p| match p.instead_of {
+            Some(other) if other == *key => Some(p.key),
+            _ if p.key == *key => p.instead_of,
+            _ => None,
+        });
+        for other in replaced.collect::<Vec<_>>() {
+            spec.values.remove(other);
         }
         spec.values.insert(key.to_string(), v * factor);
     }
@@ -387,6 +397,20 @@ mod tests {
         .expect("a range instead of the stiffness");
         assert_eq!(s.cohesion.law, LawKind::LinearIrreversible);
         assert_eq!(s.law().expect("the law").range(), 1e-4);
+        // An option for the stiffness replaces the config's range.
+        let s = spec(
+            "cohesion = { law = \"linear\", max_force = 1e-4, range = 1e-4 }",
+            &[("adhesive_stiffness", Value::Float(2.0))],
+        )
+        .expect("the stiffness instead of the range");
+        assert_eq!(s.cohesion.value("range"), None);
+        assert_eq!(s.law().expect("the law").range(), 5e-5);
+        // A config table and a study point (read by `from_table`) give the same spec.
+        let table = "cohesion = { law = \"willett\", surface_tension = 0.04 }";
+        let from_table =
+            SplitBottomSpec::from_table(toml::from_str(table).expect("TOML")).expect("a point");
+        assert_eq!(from_table, spec(table, &[]).expect("a config"));
+        assert_eq!(from_table.cohesion.value("volume"), Some(75e-12));
     }
 
     /// What a law lacks or does not have is named, with what to give instead.

@@ -221,8 +221,9 @@ impl SplitBottomSpec {
     pub fn from_table(table: toml::Table) -> Result<SplitBottomSpec, ScenarioError> {
         let mut spec: SplitBottomSpec = serde_path_to_error::deserialize(toml::Value::Table(table))
             .map_err(|e| ScenarioError::Parse(format!("key `{}`: {}", e.path(), e.inner())))?;
-        // The law's defaults written out (a Willett table without its contact angle).
-        spec.cohesion = spec.cohesion.with_defaults();
+        // The law's defaults written out as for a config file (a Willett table without
+        // its contact angle or volume), so that a study point and a config agree.
+        spec.cohesion = super::schema::cohesion(spec.cohesion, &Vec::new())?;
         Ok(spec)
     }
 
