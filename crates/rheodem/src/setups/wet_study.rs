@@ -586,6 +586,42 @@ pub fn wet_study(runs: &[WetRun], mu: Option<f64>) -> Result<WetStudy, String> {
             );
         }
     }
+    // From the torque alone, the friction unchanged: a wet run's `Δc*` against the dry
+    // run is `ΔT*/M*`, so `a` is the slope of `T*/M*` over the volumes, weighted by the
+    // torque's errors (no friction is fitted or held).
+    let _ = writeln!(
+        md,
+        "\nFrom the wall torque with the friction unchanged (a wet run's `Δc*` against the dry \
+         run is `ΔT*/M*`), `T*/M* = c_T* + a S_c*`, weighted by the torques' errors:\n\n\
+         | γ_s (N/m) | Ω, g | volumes | a | c_T* | max residual | χ²_red | p = a/γ* |\n\
+         |---|---|---|---|---|---|---|---|"
+    );
+    for (gamma_s, gamma, _, members) in &rupture_groups {
+        let pts: Vec<(f64, f64, f64)> = members
+            .iter()
+            .map(|r| {
+                let m = r.torque_factor;
+                (r.rupture, r.torque.0 / m, r.torque.1 / m)
+            })
+            .collect();
+        if let Some(line) = fit_line(&pts, false) {
+            let chi2: f64 = pts
+                .iter()
+                .map(|(x, y, e)| ((line.slope.0 * x + line.intercept.0 - y) / e).powi(2))
+                .sum();
+            let _ = writeln!(
+                md,
+                "| {gamma_s} | {} | {} | {} | {} | {:.3} | {:.2} | {:.2} |",
+                members[0].conditions(),
+                members.len(),
+                pm(line.slope),
+                pm(line.intercept),
+                line.max_residual,
+                chi2 / (pts.len() - 2) as f64,
+                line.slope.0 / gamma,
+            );
+        }
+    }
     wet_against_dry(&mut md, runs, mu);
     if !rupture_groups.is_empty() {
         let top = runs.iter().map(|r| r.rupture).fold(0.0, f64::max) * 1.05;
@@ -933,6 +969,20 @@ mod tests {
         );
         assert!(md.contains(&fixed), "{md}");
         assert!(md.contains("`--mu` 0.15"), "{md}");
+        // Torques on one line in `S_c*` at one torque factor: the torque's slope is `a`.
+        for r in &mut runs {
+            r.torque_factor = 2.9e5;
+            r.torque.0 = r.torque_factor * (0.3 + 1.1 * r.rupture);
+        }
+        let md = wet_study(&runs, Some(0.15)).expect("study").markdown;
+        let row = md
+            .lines()
+            .find(|l| l.starts_with("| 0.02 | 0.5, 9.81 | 4 | 1.100 ± "))
+            .unwrap_or_else(|| panic!("no torque row: {md}"));
+        assert!(
+            row.contains("| 0.300 ± ") && row.contains("| 0.000 | 0.00 |"),
+            "{row}"
+        );
     }
 
     /// With the 0 nl run as the intercept, one more volume determines the slope `a`: the
