@@ -349,12 +349,19 @@ impl Record {
         }
         let rec: Recorded = serde_json::from_str(text)
             .map_err(|e| format!("{origin} is not a split-bottom summary: {e}"))?;
-        let results: Value =
-            serde_json::from_str(text).map_err(|e| format!("{origin} is not JSON: {e}"))?;
-        let mut derived = Vec::new();
+        let mut record = Record::run(
+            "split-bottom",
+            name,
+            serde_json::to_value(&rec.spec).expect("specs serialise"),
+            text,
+            origin,
+        )?;
+        record.wall_seconds = rec.wall_seconds;
+        record.commit = rec.commit;
+        let derived = &mut record.derived;
         if let Ok(r) = super::wet_study::WetRun::from_summary(text, name, origin) {
             let mut add = |key: &str, (value, error): (f64, Option<f64>)| {
-                flatten(&serde_json::json!(value), key, &mut derived);
+                flatten(&serde_json::json!(value), key, derived);
                 if let (Some(e), Some(last)) = (error, derived.last_mut()) {
                     last.error = e.is_finite().then_some(e);
                 }
@@ -371,16 +378,31 @@ impl Record {
             add("scaled.torque_macro", (r.torque_macro, None));
             add("scaled.pressure", (r.pressure, None));
         }
+        Ok(record)
+    }
+
+    /// A run of the set-up `setup` from its resolved `parameters` and the text of its
+    /// result document (`origin` names it in errors), with `wall_seconds`, `commit` and
+    /// `steady` read from the document's top level where it has them.
+    fn run(
+        setup: &'static str,
+        name: &str,
+        parameters: Value,
+        text: &str,
+        origin: &str,
+    ) -> Result<Record, String> {
+        let results: Value =
+            serde_json::from_str(text).map_err(|e| format!("{origin} is not JSON: {e}"))?;
         Ok(Record {
-            setup: "split-bottom",
+            setup,
             name: name.to_string(),
-            parameters: serde_json::to_value(&rec.spec).expect("specs serialise"),
+            parameters,
             results_json: text.to_string(),
+            wall_seconds: results["wall_seconds"].as_f64(),
+            commit: results["commit"].as_str().map(str::to_string),
+            steady: results["steady"].as_bool(),
             results,
-            derived,
-            steady: None,
-            wall_seconds: rec.wall_seconds,
-            commit: rec.commit,
+            derived: Vec::new(),
             inserted_at: None,
         })
     }
@@ -523,6 +545,34 @@ impl ResultsDb {
     /// same name.
     pub fn insert(&mut self, study: &str, r: &PointResult) -> Result<(), DbError> {
         self.store(study, &Record::point(r))
+    }
+
+    /// Stores the finished run `name` of the registered set-up `setup` under `study`, for a
+    /// set-up without a method of its own here: its resolved `parameters` and the text of
+    /// its result document (its `summary.json` or result file, JSON), with `wall_seconds`,
+    /// `commit` and `steady` read from the document's top level where it has them; every
+    /// number and name of both goes into `run_values`. Replaces an earlier run of the same
+    /// name.
+    ///
+    /// # Errors
+    /// [`DbError::Corrupt`] when the document is not JSON, or the database's error.
+    pub fn insert_run(
+        &mut self,
+        study: &str,
+        setup: &'static str,
+        name: &str,
+        parameters: &Value,
+        results_json: &str,
+    ) -> Result<(), DbError> {
+        let record =
+            Record::run(setup, name, parameters.clone(), results_json, name).map_err(|reason| {
+                DbError::Corrupt {
+                    path: self.path.clone(),
+                    name: name.into(),
+                    reason,
+                }
+            })?;
+        self.store(study, &record)
     }
 
     /// Stores the finished split-bottom cell `name` under `study` from its `summary.json`
@@ -809,6 +859,51 @@ mod tests {
             wall_seconds: 12.5,
             commit: "abc".into(),
         }
+    }
+
+    #[test]
+    fn any_set_up_stores_its_parameters_and_results() {
+        let dir = std::env::temp_dir().join(format!("rheodem-db-any-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).expect("temp dir");
+        let file = dir.join("r.sqlite");
+        let mut db = ResultsDb::open(&file).expect("open");
+        let summary = r#"{"wall_seconds": 3.5, "commit": "abc", "steady": true,
+            "flow": {"mean": 1.5, "error": 0.1}, "law": "none"}"#;
+        db.insert_run(
+            "s",
+            "chute",
+            "c1",
+            &serde_json::json!({"theta_deg": 24.0, "layers": 20}),
+            summary,
+        )
+        .expect("stored");
+        assert_eq!(db.count_runs("chute", Some("s")).expect("n"), 1);
+        let (steady, wall): (bool, f64) = db
+            .connection
+            .query_row(
+                "SELECT steady, wall_seconds FROM runs WHERE name = 'c1'",
+                [],
+                |r| Ok((r.get(0)?, r.get(1)?)),
+            )
+            .expect("the run");
+        assert!(steady && wall == 3.5);
+        let value = |kind: &str, key: &str| -> (f64, Option<f64>) {
+            db.connection
+                .query_row(
+                    "SELECT value, error FROM run_values WHERE name = 'c1' AND kind = ?1 \
+                     AND key = ?2",
+                    params![kind, key],
+                    |r| Ok((r.get(0)?, r.get(1)?)),
+                )
+                .expect("a value")
+        };
+        assert_eq!(value("parameter", "theta_deg"), (24.0, None));
+        assert_eq!(value("result", "flow"), (1.5, Some(0.1)));
+        let e = db
+            .insert_run("s", "chute", "c2", &serde_json::json!({}), "not json")
+            .expect_err("not JSON");
+        assert!(e.to_string().contains("not JSON"), "{e}");
+        let _ = std::fs::remove_dir_all(&dir);
     }
 
     #[test]
