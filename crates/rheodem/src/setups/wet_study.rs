@@ -625,55 +625,63 @@ pub fn wet_study(runs: &[WetRun], mu: Option<f64>) -> Result<WetStudy, String> {
     wet_against_dry(&mut md, runs, mu);
     if !rupture_groups.is_empty() {
         let top = runs.iter().map(|r| r.rupture).fold(0.0, f64::max) * 1.05;
-        let groups: Vec<Group> = rupture_groups
+        // The figures show `c*` at the group's fixed friction, as the table at one friction
+        // and the papers (their fits hold `μ` near 0.15): free fits trade `μ` against `c`.
+        let at_friction: Vec<(f64, f64, f64, Vec<(f64, f64, f64)>)> = rupture_groups
             .iter()
-            .map(|(gamma_s, _, line, members)| Group {
-                label: format!("γ_s = {gamma_s} N/m"),
+            .filter_map(|(gamma_s, gamma, _, members)| {
+                let m = friction(runs, members[0], mu);
+                let line = rupture_line(members, |r| r.cohesion_at(m))?;
+                let points = members
+                    .iter()
+                    .map(|r| {
+                        let (c, e) = r.cohesion_at(m);
+                        (r.rupture, c - line.intercept.0, e)
+                    })
+                    .collect();
+                Some((*gamma_s, *gamma, m, points))
+            })
+            .collect();
+        let groups: Vec<Group> = at_friction
+            .iter()
+            .map(|(gamma_s, _, m, points)| Group {
+                label: format!("γ_s = {gamma_s} N/m, μ = {m:.3}"),
                 curve: if *gamma_s == 0.02 {
                     vec![(0.0, 0.0), (top, paper::A_AT_0_020 * top)]
                 } else {
                     Vec::new()
                 },
-                points: members
-                    .iter()
-                    .map(|r| (r.rupture, r.cohesion.0 - line.intercept.0, r.cohesion.1))
-                    .collect(),
+                points: points.clone(),
             })
             .collect();
         figures.push(group_figure(
             "cstar-vs-rupture",
             &Labels {
-                title: "c* − c*₀ against S_c* (Roy et al. 2016, Fig. 8a)",
+                title: "c* − c*₀ at one friction against S_c* (Roy et al. 2016, Fig. 8a)",
                 x: "rupture distance S_c* = S_c/d_p",
-                y: "c* − c*₀ (c*₀: the 0 nl run, else the fitted V_b → 0 limit)",
+                y: "c* − c*₀ at μ fixed (c*₀: the 0 nl run, else the V_b → 0 limit)",
             },
             "Eq. 20 (a = 0.98)",
             &groups,
         )?);
         // Fig. 9: (c* − c*₀)/γ* against S_c*, every surface tension, Eq. 23.
-        let groups: Vec<Group> = rupture_groups
+        let groups: Vec<Group> = at_friction
             .iter()
-            .map(|(gamma_s, gamma, line, members)| Group {
-                label: format!("γ_s = {gamma_s} N/m"),
+            .map(|(gamma_s, gamma, m, points)| Group {
+                label: format!("γ_s = {gamma_s} N/m, μ = {m:.3}"),
                 curve: vec![(0.0, 0.0), (top, paper::P * top)],
-                points: members
+                points: points
                     .iter()
-                    .map(|r| {
-                        (
-                            r.rupture,
-                            (r.cohesion.0 - line.intercept.0) / gamma,
-                            r.cohesion.1 / gamma,
-                        )
-                    })
+                    .map(|(x, y, e)| (*x, y / gamma, e / gamma))
                     .collect(),
             })
             .collect();
         figures.push(group_figure(
             "cstar-over-tension-vs-rupture",
             &Labels {
-                title: "(c* − c*₀)/γ* against S_c* (Roy et al. 2016, Fig. 9)",
+                title: "(c* − c*₀)/γ* at one friction against S_c* (Roy et al. 2016, Fig. 9)",
                 x: "rupture distance S_c*",
-                y: "(c* − c*₀)/γ*",
+                y: "(c* − c*₀)/γ* at μ fixed",
             },
             "Eq. 23 (p = 2.20)",
             &groups,
