@@ -325,6 +325,15 @@ fn willett_groups(runs: &[WetRun], key: fn(f64, f64) -> f64) -> Vec<(f64, Vec<&W
     groups
 }
 
+/// A group of Willett runs at one surface tension for the figures of `c*` against
+/// `S_c*`: `γ_s` (N/m), `γ*`, the friction held and the points `(S_c*, c* − c*₀, error)`.
+struct AtFriction {
+    gamma_s: f64,
+    gamma: f64,
+    mu: f64,
+    points: Vec<(f64, f64, f64)>,
+}
+
 /// The study's fits and figures.
 pub struct WetStudy {
     /// The report in Markdown.
@@ -627,7 +636,7 @@ pub fn wet_study(runs: &[WetRun], mu: Option<f64>) -> Result<WetStudy, String> {
         let top = runs.iter().map(|r| r.rupture).fold(0.0, f64::max) * 1.05;
         // The figures show `c*` at the group's fixed friction, as the table at one friction
         // and the papers (their fits hold `μ` near 0.15): free fits trade `μ` against `c`.
-        let at_friction: Vec<(f64, f64, f64, Vec<(f64, f64, f64)>)> = rupture_groups
+        let at_friction: Vec<AtFriction> = rupture_groups
             .iter()
             .filter_map(|(gamma_s, gamma, _, members)| {
                 let m = friction(runs, members[0], mu);
@@ -639,19 +648,24 @@ pub fn wet_study(runs: &[WetRun], mu: Option<f64>) -> Result<WetStudy, String> {
                         (r.rupture, c - line.intercept.0, e)
                     })
                     .collect();
-                Some((*gamma_s, *gamma, m, points))
+                Some(AtFriction {
+                    gamma_s: *gamma_s,
+                    gamma: *gamma,
+                    mu: m,
+                    points,
+                })
             })
             .collect();
         let groups: Vec<Group> = at_friction
             .iter()
-            .map(|(gamma_s, _, m, points)| Group {
-                label: format!("γ_s = {gamma_s} N/m, μ = {m:.3}"),
-                curve: if *gamma_s == 0.02 {
+            .map(|g| Group {
+                label: format!("γ_s = {} N/m, μ = {:.3}", g.gamma_s, g.mu),
+                curve: if g.gamma_s == 0.02 {
                     vec![(0.0, 0.0), (top, paper::A_AT_0_020 * top)]
                 } else {
                     Vec::new()
                 },
-                points: points.clone(),
+                points: g.points.clone(),
             })
             .collect();
         figures.push(group_figure(
@@ -667,12 +681,13 @@ pub fn wet_study(runs: &[WetRun], mu: Option<f64>) -> Result<WetStudy, String> {
         // Fig. 9: (c* − c*₀)/γ* against S_c*, every surface tension, Eq. 23.
         let groups: Vec<Group> = at_friction
             .iter()
-            .map(|(gamma_s, gamma, m, points)| Group {
-                label: format!("γ_s = {gamma_s} N/m, μ = {m:.3}"),
+            .map(|g| Group {
+                label: format!("γ_s = {} N/m, μ = {:.3}", g.gamma_s, g.mu),
                 curve: vec![(0.0, 0.0), (top, paper::P * top)],
-                points: points
+                points: g
+                    .points
                     .iter()
-                    .map(|(x, y, e)| (*x, y / gamma, e / gamma))
+                    .map(|(x, y, e)| (*x, y / g.gamma, e / g.gamma))
                     .collect(),
             })
             .collect();
