@@ -3,9 +3,14 @@
 use crate::law_arg;
 use anyhow::{Context, Result, bail};
 use clap::{Args, Subcommand};
+use rheodem::contact::adhesion::LAWS;
 use rheodem::contact::curve::{drive, standard_cycle};
 use rheodem::contact::equivalent::equivalent_linear;
-use rheodem::contact::{ContactLaw, Damping, LawKind, LawSpec, NormalLaw, Resistance};
+use rheodem::contact::names::with_aliases;
+use rheodem::contact::parameters::Parameter;
+use rheodem::contact::{
+    ContactLaw, Damping, LawKind, LawSpec, LinearNormal, NORMAL_LAWS, SPRING_LAWS, Spring,
+};
 use rheodem::io::atomic::write_atomic;
 use rheodem::plot::{Labels, Series, line_plot_svg};
 use rheodem::scenario::{Scenario, contact_table};
@@ -21,6 +26,9 @@ pub enum ContactCommand {
     /// The linear irreversible laws equivalent to a Willett liquid bridge (Roy et al. 2016,
     /// Sect. 4; docs/model.md §2.7).
     Equivalent(EquivalentArgs),
+    /// Every registered contact law by sub-model (normal, springs, adhesion), with the names
+    /// scenario files and options accept and the adhesive laws' parameters.
+    Laws,
 }
 
 /// Arguments of `contact curve`.
@@ -102,7 +110,67 @@ pub fn run(cmd: ContactCommand) -> Result<()> {
     match cmd {
         ContactCommand::Curve(a) => curve(a),
         ContactCommand::Equivalent(a) => equivalent(a),
+        ContactCommand::Laws => {
+            print!("{}", laws());
+            Ok(())
+        }
     }
+}
+
+/// One registered law as `contact laws` lists it: name, aliases, summary, parameters.
+type Listed = (
+    &'static str,
+    &'static [&'static str],
+    &'static str,
+    &'static [Parameter],
+);
+
+/// The registries' contents as `contact laws` prints them.
+fn laws() -> String {
+    let mut out = String::new();
+    section(
+        &mut out,
+        "Normal laws (a scenario's contact.normal.law; default linear):",
+        NORMAL_LAWS
+            .iter()
+            .map(|m| (m.name, m.aliases, m.summary, m.parameters)),
+    );
+    section(
+        &mut out,
+        "Spring laws (contact.friction.law, contact.rolling.law, contact.torsion.law; default linear):",
+        SPRING_LAWS
+            .iter()
+            .map(|m| (m.name, m.aliases, m.summary, m.parameters)),
+    );
+    section(
+        &mut out,
+        "Adhesive laws (contact.adhesion.law, the set-ups' --cohesion or --law; default none):",
+        LAWS.iter()
+            .map(|l| (l.name, l.aliases, l.summary, l.parameters)),
+    );
+    out
+}
+
+/// Writes one registry's laws under `title`, each with its parameters and their units.
+fn section(out: &mut String, title: &str, laws: impl Iterator<Item = Listed>) {
+    let _ = writeln!(out, "{title}");
+    for (name, aliases, summary, parameters) in laws {
+        let named = with_aliases(name, aliases);
+        if named.chars().count() < 28 {
+            let _ = writeln!(out, "  {named:<28}{summary}");
+        } else {
+            let _ = writeln!(out, "  {named}\n  {:<28}{summary}", "");
+        }
+        for p in parameters {
+            let unit = if p.unit.is_empty() {
+                "dimensionless"
+            } else {
+                p.unit
+            };
+            let _ = writeln!(out, "      {:<24}{} ({unit})", p.key, p.meaning);
+        }
+    }
+    let _ = writeln!(out);
 }
 
 fn flag_law(a: &CurveArgs) -> Result<ContactLaw> {
@@ -159,13 +227,14 @@ fn flag_law(a: &CurveArgs) -> Result<ContactLaw> {
         anyhow::anyhow!("{option} = {}: {}", e.value, e.reason)
     })?;
     Ok(ContactLaw {
-        normal: NormalLaw {
+        normal: LinearNormal {
             stiffness: positive("stiffness", a.stiffness)?,
             damping: Damping::NONE,
-        },
-        tangential: Resistance::NONE,
-        rolling: Resistance::NONE,
-        torsion: Resistance::NONE,
+        }
+        .into(),
+        tangential: Spring::NONE,
+        rolling: Spring::NONE,
+        torsion: Spring::NONE,
         adhesion,
     })
 }
@@ -197,7 +266,7 @@ fn curve(a: CurveArgs) -> Result<()> {
     }
     let f_max = law.adhesion.max_force(a.radius_i, a.radius_j);
     let max_overlap = a.max_overlap.unwrap_or(if f_max > 0.0 {
-        3.0 * f_max / law.normal.stiffness
+        3.0 * f_max / law.normal.max_stiffness()
     } else {
         0.01 * a.radius_i.min(a.radius_j)
     });

@@ -288,6 +288,24 @@ fn contact_tools_write_csv_and_svg() {
     let out = rheodem(&["contact", "equivalent", "--volume-nl", "75"]);
     assert!(out.status.success());
     assert!(String::from_utf8_lossy(&out.stdout).contains("0.2622"));
+    // Every registry's laws, with the adhesive laws' parameters.
+    let out = rheodem(&["contact", "laws"]);
+    assert_success(&out);
+    let listing = String::from_utf8_lossy(&out.stdout);
+    for name in [
+        "Normal laws",
+        "linear (hooke)",
+        "Spring laws",
+        "linear (coulomb)",
+        "luding (elasto_plastic, linear_plastic)",
+        "plasticity_depth",
+        "Adhesive laws",
+        "liquid_bridge (willett",
+        "surface_tension",
+        "linear_irreversible",
+    ] {
+        assert!(listing.contains(name), "{name} missing from:\n{listing}");
+    }
     let _ = std::fs::remove_dir_all(&dir);
 }
 

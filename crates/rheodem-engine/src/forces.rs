@@ -13,8 +13,9 @@
 //! into its own frame, `−Rᵀ f` and `Rᵀ τ_j`. What is measured besides the forces is up to
 //! the [`ContactObserver`] of the call.
 
-use crate::contact::kernel::{Springs, Touch};
+use crate::contact::kernel::{HistoryLanes, Touch};
 use crate::contact::lanes::{F4, Real, V3};
+use crate::contact::normal::{NormalForce, WithNormal};
 use crate::contact::{ContactTable, HistoryView, PairForce, PairKernel, PairKinematics};
 use crate::domain::{IDENTITY_IMAGE, IMAGE_COUNT, ImageTransform};
 use crate::integrate::PARTICLES_PER_TASK;
@@ -457,32 +458,41 @@ fn chunk_forces_generic<O: ContactObserver, const AVX: bool>(
             .iter()
             .all(|&q| inp.kernel_of(&within[q as usize]) == first)
     };
-    for batch in touching[..n_touching].chunks(LANES) {
-        if uniform || same_kernel(batch) {
-            touch_batch::<O, AVX>(
+    // The touching pairs, each lane group compiled for its normal law: the law is matched
+    // once for the whole chunk when every pair has the same kernel, once per lane group
+    // otherwise.
+    if uniform {
+        if n_touching > 0 {
+            touching_pairs::<O, AVX>(
                 inp,
-                inp.kernel_of(&within[batch[0] as usize]),
                 within,
-                batch,
+                &touching[..n_touching],
                 active,
                 history,
                 force,
                 torque,
                 &mut obs,
             );
-        } else {
-            for q in batch {
-                touch_batch::<O, AVX>(
-                    inp,
-                    inp.kernel_of(&within[*q as usize]),
-                    within,
-                    std::slice::from_ref(q),
-                    active,
-                    history,
-                    force,
-                    torque,
-                    &mut obs,
+        }
+    } else {
+        for batch in touching[..n_touching].chunks(LANES) {
+            if same_kernel(batch) {
+                touching_pairs::<O, AVX>(
+                    inp, within, batch, active, history, force, torque, &mut obs,
                 );
+            } else {
+                for q in batch {
+                    touching_pairs::<O, AVX>(
+                        inp,
+                        within,
+                        std::slice::from_ref(q),
+                        active,
+                        history,
+                        force,
+                        torque,
+                        &mut obs,
+                    );
+                }
             }
         }
     }
@@ -1036,7 +1046,7 @@ fn apart_batch<O: ContactObserver, const AVX: bool>(
     let normal = branch.scale(F4::splat(1.0) / dist);
     let separation = -((radius_i + radius_j) - dist);
     let (f_a, alive) = kernel.apart_lanes::<F4, false>(separation, radius_i, radius_j, bridge);
-    let rotation = kernel.resists_rotation();
+    let (rotation, keeps_state) = (kernel.resists_rotation(), kernel.keeps_state());
     for (l, c) in c.iter().enumerate().take(batch.len()) {
         let (i, j, local) = (c.i as usize, c.j as usize, c.local as usize);
         // The springs relax. Those of rotation stay zero under a law without them, so
@@ -1047,6 +1057,9 @@ fn apart_batch<O: ContactObserver, const AVX: bool>(
             if rotation {
                 *at_mut(history.rolling, local) = DVec3::ZERO;
                 *at_mut(history.torsion, local) = DVec3::ZERO;
+            }
+            if keeps_state {
+                *at_mut(history.state, local) = 0.0;
             }
             *at_mut(history.bridge, local) = alive[l];
             *at_mut(active, local) = f_a.0[l] != 0.0;
@@ -1081,14 +1094,79 @@ fn apart_batch<O: ContactObserver, const AVX: bool>(
     }
 }
 
+/// The touching pairs `pairs` (indices into `within`), all with the same kernel, lane
+/// group by lane group, compiled for the kernel's normal law (matched once here).
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+fn touching_pairs<O: ContactObserver, const AVX: bool>(
+    inp: &Inputs<'_>,
+    within: &[Candidate],
+    pairs: &[u32],
+    active: &mut [bool],
+    history: &mut HistoryView<'_>,
+    force: &mut [DVec3],
+    torque: &mut [DVec3],
+    obs: &mut O,
+) {
+    let kernel = inp.kernel_of(&within[pairs[0] as usize]);
+    kernel.normal().with(Touches::<O, AVX> {
+        inp,
+        kernel,
+        within,
+        pairs,
+        active,
+        history,
+        force,
+        torque,
+        obs,
+    });
+}
+
+/// Touching pairs with the same kernel, evaluated lane group by lane group with the
+/// kernel's normal law as its own type ([`WithNormal`]).
+struct Touches<'a, 'h, O, const AVX: bool> {
+    inp: &'a Inputs<'a>,
+    kernel: &'a PairKernel,
+    within: &'a [Candidate],
+    pairs: &'a [u32],
+    active: &'a mut [bool],
+    history: &'a mut HistoryView<'h>,
+    force: &'a mut [DVec3],
+    torque: &'a mut [DVec3],
+    obs: &'a mut O,
+}
+
+impl<O: ContactObserver, const AVX: bool> WithNormal for Touches<'_, '_, O, AVX> {
+    type Output = ();
+
+    #[inline(always)]
+    fn run<N: NormalForce>(self, normal: &N) {
+        for batch in self.pairs.chunks(LANES) {
+            touch_batch::<O, AVX, N>(
+                self.inp,
+                self.kernel,
+                normal,
+                self.within,
+                batch,
+                self.active,
+                self.history,
+                self.force,
+                self.torque,
+                self.obs,
+            );
+        }
+    }
+}
+
 /// Up to [`LANES`] touching pairs with the same kernel, evaluated in one lane group (the
 /// lanes past `batch.len()` repeat the first pair and are discarded). With `AVX` (which
 /// the CPU must have) the lane groups are put together in registers.
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
-fn touch_batch<O: ContactObserver, const AVX: bool>(
+fn touch_batch<O: ContactObserver, const AVX: bool, N: NormalForce>(
     inp: &Inputs<'_>,
     kernel: &PairKernel,
+    normal: &N,
     within: &[Candidate],
     batch: &[u32],
     active: &mut [bool],
@@ -1097,8 +1175,9 @@ fn touch_batch<O: ContactObserver, const AVX: bool>(
     torque: &mut [DVec3],
     obs: &mut O,
 ) {
-    let mut springs = Springs::<F4>::default();
+    let mut springs = HistoryLanes::<F4>::default();
     let (rotation, bridges) = (kernel.resists_rotation(), kernel.needs_bridge());
+    let keeps_state = normal.keeps_state();
     let c = lanes_of(within, batch);
     // Lane by lane into rows, then into lane groups.
     let (mut branch, mut velocity, mut omega_i, mut omega_j, mut tangential) = (
@@ -1136,6 +1215,9 @@ fn touch_batch<O: ContactObserver, const AVX: bool>(
             springs.rolling.set_lane(l, history.rolling[local]);
             springs.torsion.set_lane(l, history.torsion[local]);
         }
+        if keeps_state {
+            springs.state.0[l] = history.state[local];
+        }
     }
     // SAFETY: with `AVX` the CPU has AVX (the caller's contract).
     let mut pair = unsafe {
@@ -1162,7 +1244,7 @@ fn touch_batch<O: ContactObserver, const AVX: bool>(
     pair.normal = pair.normal.scale(one / dist);
     pair.overlap = (pair.radius_i + pair.radius_j) - dist;
     pair.reduced_mass = one / inv_mass;
-    let f = kernel.touching_lanes::<F4, false>(&pair, &mut springs, inp.dt);
+    let f = kernel.touching_lanes_with::<F4, false, N>(normal, &pair, &mut springs, inp.dt);
     for (l, c) in c.iter().enumerate().take(batch.len()) {
         let (i, j, local) = (c.i as usize, c.j as usize, c.local as usize);
         // SAFETY: `local` is a pair of the chunk's slices (see above).
@@ -1170,6 +1252,9 @@ fn touch_batch<O: ContactObserver, const AVX: bool>(
         if rotation {
             history.rolling[local] = springs.rolling.lane(l);
             history.torsion[local] = springs.torsion.lane(l);
+        }
+        if keeps_state {
+            history.state[local] = springs.state.0[l];
         }
         // SAFETY: as above.
         unsafe {
@@ -1221,7 +1306,7 @@ fn touch_batch<O: ContactObserver, const AVX: bool>(
 mod tests {
     use super::*;
     use crate::contact::standard::{bench_adhesion, bench_law};
-    use crate::contact::{Adhesion, ContactHistory, ContactLaw, Resistance};
+    use crate::contact::{Adhesion, ContactHistory, ContactLaw, Damping, LudingNormal, Resistance};
     use crate::contact::{LawKind, LinearIrreversible};
     use crate::domain::Domain;
     use crate::particles::{Motion, Sphere};
@@ -1236,9 +1321,12 @@ mod tests {
                 stiffness: 1000.0,
                 mu_static: 0.1,
                 mu_dynamic: 0.1,
-                ..law.tangential
+                ..*law
+                    .tangential
+                    .linear()
+                    .expect("the bench's sliding spring is linear")
             };
-            (law.rolling, law.torsion) = (r, r);
+            (law.rolling, law.torsion) = (r.into(), r.into());
         }
         law
     }
@@ -1519,6 +1607,24 @@ mod tests {
         let mut mixed = ContactTable::uniform(2, law(willett, false));
         mixed.set(0, 1, law(reversible, false));
         mixed.set(1, 1, law(Adhesion::None, true));
+        // Luding's law keeps a state per contact (its largest overlap): alone, and beside
+        // a law that keeps none, with a liquid bridge on top.
+        let plastic = |adhesion| ContactLaw {
+            normal: LudingNormal {
+                stiffness: 1.0e4,
+                max_stiffness: 5.0e4,
+                adhesive_stiffness: 5.0e3,
+                plasticity_depth: 0.05,
+                damping: Damping {
+                    per_mass: 27.6941,
+                    ..Damping::NONE
+                },
+            }
+            .into(),
+            ..law(adhesion, true)
+        };
+        let mut plastic_mixed = ContactTable::uniform(2, plastic(willett));
+        plastic_mixed.set(0, 1, law(Adhesion::None, false));
         let tables = [
             (
                 "frictional",
@@ -1534,6 +1640,8 @@ mod tests {
                 ContactTable::uniform(1, law(reversible, false)),
             ),
             ("mixed", mixed),
+            ("Luding", ContactTable::uniform(1, plastic(Adhesion::None))),
+            ("Luding mixed", plastic_mixed),
         ];
         let dt = 1e-4;
         let images = Domain::new(DVec3::ZERO, DVec3::splat(6.0), [true; 3]).image_transforms();
@@ -1607,12 +1715,14 @@ mod tests {
                             (
                                 got.active[k],
                                 bits(&[a.tangential, a.rolling, a.torsion]),
-                                a.bridge
+                                a.bridge,
+                                a.state.to_bits()
                             ),
                             (
                                 plain.active[k],
                                 bits(&[b.tangential, b.rolling, b.torsion]),
-                                b.bridge
+                                b.bridge,
+                                b.state.to_bits()
                             ),
                             "{name}, {threads} threads, round {round}, pair {k}: plain copy"
                         );
@@ -1641,6 +1751,15 @@ mod tests {
                     }
                 }
                 assert!(lost > 0, "{name}: some pairs lose their force");
+                if laws.kernel(0, 0).keeps_state() {
+                    let kept = list
+                        .slices()
+                        .history
+                        .iter()
+                        .filter(|h| h.state > 0.0)
+                        .count();
+                    assert!(kept > 0, "{name}: contacts keep their largest overlap");
+                }
                 if laws.forms_bridges() {
                     assert!(bridges_apart > 0, "{name}: some bridges hold pairs apart");
                 }

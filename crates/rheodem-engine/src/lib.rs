@@ -19,7 +19,7 @@
 //! ```
 //! use glam::DVec3;
 //! use rheodem_engine::Simulation;
-//! use rheodem_engine::contact::{Adhesion, ContactLaw, ContactTable, Damping, NormalLaw, Resistance};
+//! use rheodem_engine::contact::{Adhesion, ContactLaw, ContactTable, Damping, LinearNormal, Spring};
 //! use rheodem_engine::domain::Domain;
 //! use rheodem_engine::particles::{Motion, Particles, Sphere};
 //!
@@ -34,10 +34,10 @@
 //! };
 //! particles.push(sphere, 2000.0);
 //! let law = ContactLaw {
-//!     normal: NormalLaw { stiffness: 100.0, damping: Damping::NONE },
-//!     tangential: Resistance::NONE,
-//!     rolling: Resistance::NONE,
-//!     torsion: Resistance::NONE,
+//!     normal: LinearNormal { stiffness: 100.0, damping: Damping::NONE }.into(),
+//!     tangential: Spring::NONE,
+//!     rolling: Spring::NONE,
+//!     torsion: Spring::NONE,
 //!     adhesion: Adhesion::None,
 //! };
 //! let domain = Domain::new(DVec3::ZERO, DVec3::splat(0.1), [false; 3]);

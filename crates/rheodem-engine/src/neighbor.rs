@@ -1085,6 +1085,7 @@ mod tests {
                             rolling: random(1.0),
                             torsion: random(1.0),
                             bridge: k % 2 == 0,
+                            state: random(1.0).x,
                         };
                         list.active[k] = true;
                         list.history.view().set(k, &h);
@@ -1371,15 +1372,16 @@ mod tests {
         let (mut p, domain, team, mut list) = built_chain();
         let extra = p.sphere(0);
         p.push(extra, 1.0);
-        use crate::contact::{Adhesion, ContactLaw, Damping, NormalLaw, Resistance};
+        use crate::contact::{Adhesion, ContactLaw, Damping, LinearNormal, Spring};
         let law = ContactLaw {
-            normal: NormalLaw {
+            normal: LinearNormal {
                 stiffness: 1.0e4,
                 damping: Damping::NONE,
-            },
-            tangential: Resistance::NONE,
-            rolling: Resistance::NONE,
-            torsion: Resistance::NONE,
+            }
+            .into(),
+            tangential: Spring::NONE,
+            rolling: Spring::NONE,
+            torsion: Spring::NONE,
             adhesion: Adhesion::None,
         };
         crate::forces::pair_forces::<()>(

@@ -76,8 +76,9 @@ impl ContactView<'_> {
 
     /// Energy stored in the pair's springs alone (J, ≥ 0), without the adhesive potential.
     pub fn spring_energy(&self) -> f64 {
+        let k = self.kinematics;
         self.kernel
-            .spring_energy(self.kinematics.overlap, self.history)
+            .spring_energy(k.overlap, k.radius_i, k.radius_j, self.history)
     }
 }
 

@@ -81,16 +81,16 @@ impl Simulation {
     /// ```
     /// use glam::DVec3;
     /// use rheodem_engine::Simulation;
-    /// use rheodem_engine::contact::{Adhesion, ContactLaw, ContactTable, Damping, NormalLaw, Resistance};
+    /// use rheodem_engine::contact::{Adhesion, ContactLaw, ContactTable, Damping, LinearNormal, Spring};
     /// use rheodem_engine::domain::Domain;
     /// use rheodem_engine::particles::{Motion, Particles, Sphere};
     ///
     /// let (a, delta, k_n) = (1.0e-3, 1.0e-5, 100.0);
     /// let law = ContactLaw {
-    ///     normal: NormalLaw { stiffness: k_n, damping: Damping::from_restitution(0.8, k_n) },
-    ///     tangential: Resistance::NONE,
-    ///     rolling: Resistance::NONE,
-    ///     torsion: Resistance::NONE,
+    ///     normal: LinearNormal { stiffness: k_n, damping: Damping::from_restitution(0.8, k_n) }.into(),
+    ///     tangential: Spring::NONE,
+    ///     rolling: Spring::NONE,
+    ///     torsion: Spring::NONE,
     ///     adhesion: Adhesion::None,
     /// };
     /// let mut particles = Particles::default();

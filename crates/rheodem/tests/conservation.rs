@@ -57,10 +57,10 @@ fn full_law(e: f64, mu: f64, mu_ro: f64) -> ContactLaw {
     let resistance = Resistance {
         mu_static: mu_ro,
         mu_dynamic: mu_ro,
-        ..law.tangential
+        ..*law.tangential.linear().expect("a linear sliding spring")
     };
-    law.rolling = resistance;
-    law.torsion = resistance;
+    law.rolling = resistance.into();
+    law.torsion = resistance.into();
     law
 }
 

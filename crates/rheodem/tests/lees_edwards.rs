@@ -77,10 +77,10 @@ fn full_law(e: f64, mu: f64) -> ContactLaw {
     let r = Resistance {
         mu_static: 0.1,
         mu_dynamic: 0.1,
-        ..law.tangential
+        ..*law.tangential.linear().expect("a linear sliding spring")
     };
-    law.rolling = r;
-    law.torsion = r;
+    law.rolling = r.into();
+    law.torsion = r.into();
     law
 }
 
@@ -1062,7 +1062,7 @@ fn neighbour_list_is_complete_under_pure_compression() {
 /// flow: `L b = v̄(r + b) − v̄(r)`.
 #[test]
 fn peculiar_contacts_subtract_the_boundarys_mean_flow() {
-    use rheodem::contact::{ContactTable, Damping, NormalLaw};
+    use rheodem::contact::{ContactTable, Damping, LinearNormal, Spring};
     use rheodem::forces::{ForceScratch, pair_forces};
     use rheodem::neighbor::NeighborList;
     use rheodem::particles::{Motion, Particles};
@@ -1090,18 +1090,20 @@ fn peculiar_contacts_subtract_the_boundarys_mean_flow() {
         assert!((gradient * b - expected).length() < 1e-15, "{b}");
     }
     let law = ContactLaw {
-        normal: NormalLaw {
+        normal: LinearNormal {
             stiffness: 100.0,
             damping: Damping::NONE,
-        },
+        }
+        .into(),
         tangential: Resistance {
             stiffness: 40.0,
             damping: Damping::NONE,
             mu_static: 10.0,
             mu_dynamic: 10.0,
-        },
-        rolling: Resistance::NONE,
-        torsion: Resistance::NONE,
+        }
+        .into(),
+        rolling: Spring::NONE,
+        torsion: Spring::NONE,
         adhesion: rheodem::contact::Adhesion::None,
     };
     let sliding_spring = |mean_flow| {

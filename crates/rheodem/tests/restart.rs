@@ -63,8 +63,57 @@ fn fingerprint(run: &Run) -> (Vec<[u64; 9]>, String) {
 }
 
 fn start(dir: &Path) -> Run {
-    let sc = Scenario::from_toml(SCENARIO).expect("valid scenario");
+    start_scenario(SCENARIO, dir)
+}
+
+fn start_scenario(scenario: &str, dir: &Path) -> Run {
+    let sc = Scenario::from_toml(scenario).expect("valid scenario");
     Run::start(sc, Path::new("."), dir, rayon::current_num_threads(), true).expect("run starts")
+}
+
+/// A run stopped at step 1700 and resumed from its checkpoint at step 1500 ends in the bits
+/// of the uninterrupted run; `check` sees the run as it was read back.
+fn stop_resume_and_compare(scenario: &str, name: &str, check: impl FnOnce(&mut Run)) {
+    let whole_dir = temp_dir(&format!("{name}-whole"));
+    let mut whole = start_scenario(scenario, &whole_dir);
+    whole.advance(&whole_dir, |_| {}).expect("run");
+    let split_dir = temp_dir(&format!("{name}-split"));
+    let mut first = start_scenario(scenario, &split_dir);
+    first
+        .advance_until(&split_dir, 1700, &mut |_| {})
+        .expect("run");
+    drop(first);
+    let mut resumed = Run::resume(&split_dir).expect("checkpoint readable");
+    assert_eq!(resumed.simulation.step, 1500);
+    check(&mut resumed);
+    resumed.advance(&split_dir, |_| {}).expect("run");
+    assert!(
+        fingerprint(&whole) == fingerprint(&resumed),
+        "{name}: resume differs"
+    );
+    for d in [whole_dir, split_dir] {
+        let _ = std::fs::remove_dir_all(d);
+    }
+}
+
+#[test]
+fn a_plastic_contact_keeps_its_largest_overlap_through_a_checkpoint() {
+    // Luding's elasto-plastic law keeps each contact's largest overlap as its state: the
+    // checkpoint holds it, and the resumed run continues in the same bits.
+    let scenario = SCENARIO.replace(
+        "normal = { stiffness = 100.0, restitution = 0.8 }",
+        "normal = { law = \"luding\", stiffness = 100.0, max_stiffness = 500.0, \
+         adhesive_stiffness = 50.0, plasticity_depth = 0.05, restitution = 0.8 }",
+    );
+    assert_ne!(scenario, SCENARIO);
+    stop_resume_and_compare(&scenario, "luding", |resumed| {
+        let slices = resumed.simulation.neighbors.slices();
+        let kept = slices.history.iter().filter(|h| h.state > 0.0).count();
+        assert!(
+            kept > 0,
+            "the checkpoint holds the contacts' largest overlaps"
+        );
+    });
 }
 
 #[test]

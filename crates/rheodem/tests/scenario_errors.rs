@@ -102,6 +102,55 @@ fn malformed_scenarios_name_the_key_and_range() {
             &["contact[0].normal.stiffness", "positive"],
         ),
         (
+            "an unknown normal law",
+            ("stiffness = 100.0", "law = \"hertzian\", stiffness = 100.0"),
+            &["contact[0]", "hertzian", "linear (hooke)", "luding"],
+        ),
+        (
+            "Luding's law without its largest stiffness",
+            (
+                "stiffness = 100.0",
+                "law = \"luding\", stiffness = 100.0, plasticity_depth = 0.05",
+            ),
+            &[
+                "contact[0].normal.max_stiffness",
+                "(missing)",
+                "`luding` needs it",
+            ],
+        ),
+        (
+            "Luding's law with k_p below k_1",
+            (
+                "stiffness = 100.0",
+                "law = \"luding\", stiffness = 100.0, max_stiffness = 50.0, plasticity_depth = 0.05",
+            ),
+            &["contact[0].normal.max_stiffness", "k_p > k_1"],
+        ),
+        (
+            "Luding's law with a plasticity depth above one",
+            (
+                "stiffness = 100.0",
+                "law = \"elasto-plastic\", stiffness = 100.0, max_stiffness = 500.0, plasticity_depth = 2.0",
+            ),
+            &["contact[0].normal.plasticity_depth", "(0, 1]"],
+        ),
+        (
+            "a key of Luding's law under the linear law",
+            (
+                "stiffness = 100.0",
+                "stiffness = 100.0, plasticity_depth = 0.05",
+            ),
+            &[
+                "contact[0].normal.plasticity_depth",
+                "not a parameter of the law `linear`",
+            ],
+        ),
+        (
+            "an unknown spring law",
+            ("mu = 0.5", "mu = 0.5, law = \"velcro\""),
+            &["contact[0].friction.law", "velcro", "linear (coulomb)"],
+        ),
+        (
             "negative friction",
             ("mu = 0.5", "mu = -0.5"),
             &["contact[0].friction.mu_static", "≥ 0"],

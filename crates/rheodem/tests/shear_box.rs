@@ -139,8 +139,11 @@ fn controls_round_trip_through_si_values() {
         assert_eq!(sc.run.duration, Some(dv.duration));
         assert_eq!(sc.species[0].density, rho);
         assert_eq!(sc.contacts.len(), 1);
-        assert_eq!(sc.contacts[0].normal.stiffness, k);
-        assert_eq!(sc.contacts[0].normal.restitution, Some(s.restitution));
+        assert_eq!(sc.contacts[0].normal.value("stiffness"), Some(k));
+        assert_eq!(
+            sc.contacts[0].normal.value("restitution"),
+            Some(s.restitution)
+        );
         match &sc.particles[0] {
             ParticleGroup::Random {
                 count,
@@ -158,9 +161,10 @@ fn controls_round_trip_through_si_values() {
         let table = contact_table(&sc).expect("contact table");
         let law = table.get(0, 0);
         if mu > 0.0 {
-            assert_eq!(law.tangential.mu_static, mu);
-            assert_eq!(law.tangential.mu_dynamic, mu);
-            assert!(close(law.tangential.stiffness, 2.0 / 7.0 * k, 1e-14));
+            let sliding = law.tangential.linear().expect("a linear sliding spring");
+            assert_eq!(sliding.mu_static, mu);
+            assert_eq!(sliding.mu_dynamic, mu);
+            assert!(close(sliding.stiffness, 2.0 / 7.0 * k, 1e-14));
         } else {
             assert!(!law.tangential.is_active());
         }

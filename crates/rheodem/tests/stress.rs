@@ -17,7 +17,9 @@
 use glam::{DMat3, DVec3};
 use rheodem::Simulation;
 use rheodem::contact::Reversible;
-use rheodem::contact::{Adhesion, ContactLaw, ContactTable, Damping, NormalLaw, Resistance};
+use rheodem::contact::{
+    Adhesion, ContactLaw, ContactTable, Damping, LinearNormal, Resistance, Spring,
+};
 use rheodem::domain::Domain;
 use rheodem::forces::{ForceScratch, pair_forces};
 use rheodem::measure::{ContactSums, kinetic_stress_sum};
@@ -51,18 +53,20 @@ fn law(adhesive: bool) -> ContactLaw {
         ..Damping::NONE
     };
     ContactLaw {
-        normal: NormalLaw {
+        normal: LinearNormal {
             stiffness: KN,
             damping,
-        },
+        }
+        .into(),
         tangential: Resistance {
             stiffness: RATIO_T * KN,
             damping: damping.scaled(RATIO_T),
             mu_static: MU,
             mu_dynamic: MU,
-        },
-        rolling: Resistance::NONE,
-        torsion: Resistance::NONE,
+        }
+        .into(),
+        rolling: Spring::NONE,
+        torsion: Spring::NONE,
         adhesion: if adhesive {
             Adhesion::Reversible(Reversible {
                 max_force: F_MAX,

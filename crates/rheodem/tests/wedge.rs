@@ -17,7 +17,9 @@ use common::*;
 use glam::{DMat3, DVec3};
 use rand::RngExt;
 use rheodem::Simulation;
-use rheodem::contact::{Adhesion, ContactLaw, ContactTable, Damping, NormalLaw, Resistance};
+use rheodem::contact::{
+    Adhesion, ContactLaw, ContactTable, Damping, LinearNormal, Resistance, Spring,
+};
 use rheodem::contact::{LiquidBridge, Reversible};
 use rheodem::domain::Domain;
 use rheodem::measure::angular_momentum;
@@ -99,10 +101,10 @@ fn bonded_law() -> ContactLaw {
     let r = Resistance {
         mu_static: 0.1,
         mu_dynamic: 0.1,
-        ..law.tangential
+        ..*law.tangential.linear().expect("a linear sliding spring")
     };
-    law.rolling = r;
-    law.torsion = r;
+    law.rolling = r.into();
+    law.torsion = r.into();
     law.adhesion = Adhesion::Reversible(Reversible {
         max_force: F_MAX,
         stiffness: 10.0,
@@ -537,13 +539,14 @@ fn closing_walls(ri: f64, ro: f64, z_lo: f64, z_hi: f64, species: u16) -> Vec<Wa
 /// The linear normal law alone, undamped: conservative (potential `½ k_n δ²`).
 fn smooth_law() -> ContactLaw {
     ContactLaw {
-        normal: NormalLaw {
+        normal: LinearNormal {
             stiffness: KN,
             damping: Damping::NONE,
-        },
-        tangential: Resistance::NONE,
-        rolling: Resistance::NONE,
-        torsion: Resistance::NONE,
+        }
+        .into(),
+        tangential: Spring::NONE,
+        rolling: Spring::NONE,
+        torsion: Spring::NONE,
         adhesion: Adhesion::None,
     }
 }
@@ -667,7 +670,7 @@ fn closed_wedge_gas(grains: ContactLaw) -> GasRun {
 #[test]
 fn angular_momentum_about_the_axis_is_conserved() {
     let mut grains = frictional_law(1.0, 1.0e6);
-    grains.tangential.damping = Damping::NONE;
+    grains.tangential = grains.tangential.damping_scaled(0.0);
     let frictional = closed_wedge_gas(grains);
     assert!(
         frictional.angular_momentum_error < 1e-12,
@@ -1130,10 +1133,10 @@ fn rebuilds_change_nothing_and_the_list_is_complete() {
     let r = Resistance {
         mu_static: 0.1,
         mu_dynamic: 0.1,
-        ..law.tangential
+        ..*law.tangential.linear().expect("a linear sliding spring")
     };
-    law.rolling = r;
-    law.torsion = r;
+    law.rolling = r.into();
+    law.torsion = r.into();
     let (angle, ri, ro) = (PI / 3.0, 0.01, 0.022);
     let spheres = wedge_lattice(angle, ri, ro, 0.0, 200, 0.15, -0.15, 50.0, 0.0, 2.25, 7);
     let tagged: Vec<(Sphere, u16)> = spheres.iter().map(|s| (*s, NO_PART)).collect();

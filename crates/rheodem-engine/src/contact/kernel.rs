@@ -9,25 +9,23 @@
 //! contact law: [`ContactLaw::interact`] resolves the law and calls it.
 
 use super::adhesion::ResolvedAdhesion;
-use super::friction::Resistance;
 use super::lanes::{Real, V3};
-use super::normal::Damping;
+use super::normal::{NormalForce, ResolvedNormal};
+use super::spring::Spring;
 use super::{ContactHistory, ContactLaw, PairForce, PairKinematics};
 
 /// A species pair's contact law with every per-run constant resolved (see the module
 /// documentation). Units as in [`ContactLaw`].
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct PairKernel {
-    /// Normal stiffness `k_n` (N/m).
-    stiffness: f64,
-    /// Normal damping `γ_n(m_ij)`.
-    damping: Damping,
+    /// The normal law with its constants.
+    normal: ResolvedNormal,
     /// Sliding resistance, used when `sliding` is set.
-    tangential: Resistance,
-    /// Rolling resistance, used when `rolling` is set.
-    rolling: Resistance,
-    /// Torsion resistance, used when `torsion` is set.
-    torsion: Resistance,
+    tangential: Spring,
+    /// Rolling resistance, used when `rolling_on` is set.
+    rolling: Spring,
+    /// Torsion resistance, used when `torsion_on` is set.
+    torsion: Spring,
     /// Whether sliding friction acts at all.
     sliding: bool,
     /// Whether rolling resistance acts at all.
@@ -42,8 +40,7 @@ impl PairKernel {
     /// Resolves `law`.
     pub fn new(law: &ContactLaw) -> PairKernel {
         PairKernel {
-            stiffness: law.normal.stiffness,
-            damping: law.normal.damping,
+            normal: law.normal.resolve(),
             tangential: law.tangential,
             rolling: law.rolling,
             torsion: law.torsion,
@@ -116,10 +113,11 @@ impl PairKernel {
             omega_j: V3::from_glam(k.omega_j),
             reduced_mass: k.reduced_mass,
         };
-        let mut springs = Springs {
+        let mut springs = HistoryLanes {
             tangential: V3::from_glam(h.tangential),
             rolling: V3::from_glam(h.rolling),
             torsion: V3::from_glam(h.torsion),
+            state: h.state,
         };
         let f = if k.radius_j.is_finite() {
             self.touching_lanes::<f64, false>(&pair, &mut springs, dt)
@@ -129,6 +127,7 @@ impl PairKernel {
         h.tangential = springs.tangential.to_glam();
         h.rolling = springs.rolling.to_glam();
         h.torsion = springs.torsion.to_glam();
+        h.state = springs.state;
         if self.needs_bridge() {
             h.bridge = true;
         }
@@ -160,7 +159,8 @@ impl PairKernel {
     /// the springs' `½ k x²` while touching, plus the adhesive potential. See
     /// [`ContactLaw::elastic_energy`].
     pub fn elastic_energy(&self, overlap: f64, a_i: f64, a_j: f64, h: &ContactHistory) -> f64 {
-        self.spring_energy(overlap, h) + self.adhesive_potential(overlap, a_i, a_j, h.bridge)
+        self.spring_energy(overlap, a_i, a_j, h)
+            + self.adhesive_potential(overlap, a_i, a_j, h.bridge)
     }
 
     /// The adhesive potential (J, ≤ 0) of the pair at overlap `δ` (m) for radii `a_i`,
@@ -170,15 +170,17 @@ impl PairKernel {
         self.adhesion.potential(overlap, a_i, a_j, bridge)
     }
 
-    /// Energy (J, ≥ 0) of the pair's springs alone at overlap `δ` (m) with history `h`:
-    /// `½ k_n δ² + ½ k_t |ξ_t|² + ½ k_r |ξ_r|² + ½ k_o |ξ_o|²` while touching, zero apart —
-    /// the repulsive part of [`PairKernel::elastic_energy`], without the adhesive potential.
-    pub fn spring_energy(&self, overlap: f64, h: &ContactHistory) -> f64 {
+    /// Energy (J, ≥ 0) of the pair's springs alone at overlap `δ` (m) between radii `a_i`,
+    /// `a_j` (m) with history `h`: the normal law's energy and the three springs' while
+    /// touching (`½ k_n δ² + ½ k_t |ξ_t|² + ½ k_r |ξ_r|² + ½ k_o |ξ_o|²` for linear laws),
+    /// zero apart — the repulsive part of [`PairKernel::elastic_energy`], without the
+    /// adhesive potential.
+    pub fn spring_energy(&self, overlap: f64, a_i: f64, a_j: f64, h: &ContactHistory) -> f64 {
         if overlap > 0.0 {
-            0.5 * (self.stiffness * overlap * overlap
-                + self.tangential.stiffness * h.tangential.length_squared()
-                + self.rolling.stiffness * h.rolling.length_squared()
-                + self.torsion.stiffness * h.torsion.length_squared())
+            self.normal.energy(overlap, a_i, a_j, h.state)
+                + self.tangential.energy(h.tangential, overlap, a_i, a_j)
+                + self.rolling.energy(h.rolling, overlap, a_i, a_j)
+                + self.torsion.energy(h.torsion, overlap, a_i, a_j)
         } else {
             0.0
         }
@@ -188,6 +190,12 @@ impl PairKernel {
     #[inline(always)]
     pub fn needs_bridge(&self) -> bool {
         self.adhesion.needs_bridge()
+    }
+
+    /// Whether the normal law keeps a per-contact state ([`NormalForce::KEEPS_STATE`]).
+    #[inline(always)]
+    pub fn keeps_state(&self) -> bool {
+        self.normal.keeps_state()
     }
 
     /// Whether the law has rolling or torsion resistance (springs beyond the sliding one).
@@ -202,7 +210,26 @@ impl PairKernel {
     pub fn touching_lanes<R: Real, const WALL: bool>(
         &self,
         k: &Touch<R>,
-        springs: &mut Springs<R>,
+        springs: &mut HistoryLanes<R>,
+        dt: f64,
+    ) -> TouchForce<R> {
+        self.touching_lanes_with::<R, WALL, _>(&self.normal, k, springs, dt)
+    }
+
+    /// The kernel's normal law, resolved (for [`ResolvedNormal::with`]).
+    #[inline(always)]
+    pub fn normal(&self) -> &ResolvedNormal {
+        &self.normal
+    }
+
+    /// [`PairKernel::touching_lanes`] with the kernel's normal law given as `normal`, its
+    /// own type, so that the caller's code is compiled for that law alone.
+    #[inline(always)]
+    pub fn touching_lanes_with<R: Real, const WALL: bool, N: NormalForce>(
+        &self,
+        normal: &N,
+        k: &Touch<R>,
+        springs: &mut HistoryLanes<R>,
         dt: f64,
     ) -> TouchForce<R> {
         let n = k.normal;
@@ -210,12 +237,15 @@ impl PairKernel {
         let lever_i = k.radius_i - half * k.overlap;
         let lever_j = k.radius_j - half * k.overlap;
         let overlap_rate = -k.velocity.dot(n);
-        let gamma_n = self.damping.in_lanes(k.reduced_mass);
-        let f_rep = R::splat(self.stiffness) * k.overlap + gamma_n * overlap_rate;
+        let normal = normal.force_lanes::<R, WALL>(k, overlap_rate, &mut springs.state);
+        let f_rep = normal.repulsive;
         let limit_ref = f_rep.abs();
-        let f_a = self
+        let mut f_a = self
             .adhesion
             .contact_force_lanes::<R, WALL>(k.radius_i, k.radius_j);
+        if let Some(own) = normal.adhesive {
+            f_a = f_a + own;
+        }
         let mut out = TouchForce {
             force: n.scale(f_rep + f_a),
             torque_i: V3::zero(),
@@ -235,10 +265,9 @@ impl PairKernel {
             };
             let v_contact = k.velocity - spin.cross(n);
             let v_t = v_contact - n.scale(n.dot(v_contact));
-            let gamma_t = self.tangential.damping.in_lanes(k.reduced_mass);
             let (f_t, slip) =
                 self.tangential
-                    .in_plane(&mut springs.tangential, n, v_t, gamma_t, limit_ref, dt);
+                    .in_plane_lanes(&mut springs.tangential, n, v_t, k, limit_ref, dt);
             let arm = n.cross(f_t);
             out.force = out.force + f_t;
             out.torque_i = arm.scale(-lever_i);
@@ -257,20 +286,18 @@ impl PairKernel {
             let w_rel = k.omega_i - k.omega_j;
             if self.rolling_on {
                 let v_r = w_rel.cross(n).scale(-a_eff);
-                let gamma_r = self.rolling.damping.in_lanes(k.reduced_mass);
                 let (f_r, _) =
                     self.rolling
-                        .in_plane(&mut springs.rolling, n, v_r, gamma_r, limit_ref, dt);
+                        .in_plane_lanes(&mut springs.rolling, n, v_r, k, limit_ref, dt);
                 let t = n.cross(f_r).scale(-a_eff);
                 out.torque_i = out.torque_i + t;
                 out.torque_j = out.torque_j - t;
             }
             if self.torsion_on {
                 let v_o = n.scale(a_eff * w_rel.dot(n));
-                let gamma_o = self.torsion.damping.in_lanes(k.reduced_mass);
                 let (f_o, _) =
                     self.torsion
-                        .along_normal(&mut springs.torsion, n, v_o, gamma_o, limit_ref, dt);
+                        .along_normal_lanes(&mut springs.torsion, n, v_o, k, limit_ref, dt);
                 let t = f_o.scale(a_eff);
                 out.torque_i = out.torque_i + t;
                 out.torque_j = out.torque_j - t;
@@ -302,15 +329,18 @@ pub struct Touch<R> {
     pub reduced_mass: R,
 }
 
-/// The three springs of a contact's history (m), in lanes.
+/// A touching contact's history in lanes: the three springs (m) and the normal law's state
+/// (see [`ContactHistory`]).
 #[derive(Clone, Copy, Debug, Default)]
-pub struct Springs<R> {
+pub struct HistoryLanes<R> {
     /// Sliding spring.
     pub tangential: V3<R>,
     /// Rolling spring.
     pub rolling: V3<R>,
     /// Torsion spring.
     pub torsion: V3<R>,
+    /// The normal law's per-contact state (zero under a law that keeps none).
+    pub state: R,
 }
 
 /// What [`PairKernel::touching_lanes`] returns: forces and torques on `i` (N, N m), the

@@ -1,8 +1,9 @@
 //! Contact laws between two spheres (docs/model.md §2).
 //!
-//! A [`ContactLaw`] combines independent parts: the linear visco-elastic [`NormalLaw`],
-//! three spring–dashpot–Coulomb [`Resistance`]s (sliding, rolling, torsion) and an
-//! [`Adhesion`] law. Per-contact state lives in one [`ContactHistory`] record.
+//! A [`ContactLaw`] combines independent sub-models, each chosen from its registry by name:
+//! a [`Normal`] law (`normal/`), three [`Spring`]s (sliding, rolling, torsion; `spring/`)
+//! and an [`Adhesion`] law (`adhesion/`). Per-contact state lives in one [`ContactHistory`]
+//! record.
 //! A [`ContactTable`] resolves each species pair's law into a [`PairKernel`]
 //! (`kernel.rs`), the single implementation of the law, written generic over one contact
 //! or four in lanes (`lanes.rs`); the force loop, the walls and [`ContactLaw::interact`]
@@ -10,14 +11,18 @@
 //! Sign convention: `n` points from the second particle `j` to the first `i`; the returned
 //! force acts on `i`, and `−force` on `j`.
 
+pub mod names;
+
 pub mod adhesion;
 pub mod curve;
+pub mod damping;
 pub mod equivalent;
-pub mod friction;
 pub mod kernel;
 pub mod lanes;
 pub mod normal;
+pub mod parameters;
 pub mod slots;
+pub mod spring;
 pub mod standard;
 
 use crate::domain::ImageTransform;
@@ -27,29 +32,33 @@ use serde::{Deserialize, Serialize};
 pub use adhesion::{
     Adhesion, LawKind, LawSpec, LinearIrreversible, LiquidBridge, Reversible, Strength,
 };
-pub use friction::Resistance;
+pub use damping::Damping;
 pub use kernel::PairKernel;
-pub use normal::{Damping, NormalLaw};
+pub use names::ModelInfo;
+pub use normal::{
+    LinearNormal, LudingNormal, NORMAL_LAWS, Normal, NormalKind, NormalModel, NormalSpec,
+};
 pub use slots::{HistorySlots, HistoryView};
+pub use spring::{Resistance, SPRING_LAWS, Spring, SpringKind, SpringModel};
 
 /// The full contact law of one species pair.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct ContactLaw {
-    /// Linear visco-elastic normal force.
-    pub normal: NormalLaw,
-    /// Sliding friction (stiffness `k_t` in N/m).
-    pub tangential: Resistance,
-    /// Rolling resistance (stiffness `k_r` in N/m, acting on the rolling displacement).
-    pub rolling: Resistance,
-    /// Torsion resistance (stiffness `k_o` in N/m, acting on the torsional displacement).
-    pub torsion: Resistance,
+    /// Repulsive normal force.
+    pub normal: Normal,
+    /// Sliding friction (stiffness `k_t` in N/m for the linear spring).
+    pub tangential: Spring,
+    /// Rolling resistance (acting on the rolling displacement).
+    pub rolling: Spring,
+    /// Torsion resistance (acting on the torsional displacement).
+    pub torsion: Spring,
     /// Adhesive force added to the normal force.
     pub adhesion: Adhesion,
 }
 
-/// Per-contact history: the three springs (m), reset to zero when the contact opens, and
-/// the liquid bridge of irreversible adhesive laws, which outlives the contact until it
-/// ruptures.
+/// Per-contact history: the three springs (m) and the normal law's state, reset to zero
+/// when the contact opens, and the liquid bridge of irreversible adhesive laws, which
+/// outlives the contact until it ruptures.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct ContactHistory {
     /// Tangential (sliding) spring `ξ_t`.
@@ -60,6 +69,11 @@ pub struct ContactHistory {
     pub torsion: DVec3,
     /// Whether an irreversible law's bridge exists.
     pub bridge: bool,
+    /// The per-contact state a normal law declares it keeps ([`normal::NormalForce::KEEPS_STATE`],
+    /// a number in the law's own unit, e.g. the largest overlap reached in m); zero under a
+    /// law that keeps none. Absent from records written before laws could keep state.
+    #[serde(default)]
+    pub state: f64,
 }
 
 impl ContactHistory {
@@ -72,11 +86,13 @@ impl ContactHistory {
             rolling: self.rolling,
             torsion: -self.torsion,
             bridge: self.bridge,
+            state: self.state,
         }
     }
 
     /// The same history with its springs mapped into an image's frame: `R ξ` for each
-    /// spring (unchanged under a pure translation).
+    /// spring (unchanged under a pure translation); the normal law's state is a scalar and
+    /// stays.
     pub fn rotated(&self, image: &ImageTransform) -> ContactHistory {
         self.map(|v| image.vector(v))
     }
@@ -92,6 +108,7 @@ impl ContactHistory {
             rolling: f(self.rolling),
             torsion: f(self.torsion),
             bridge: self.bridge,
+            state: self.state,
         }
     }
 }
@@ -152,15 +169,15 @@ impl ContactLaw {
     /// ```
     /// use glam::DVec3;
     /// use rheodem_engine::contact::{
-    ///     Adhesion, ContactHistory, ContactLaw, Damping, NormalLaw, PairKinematics, Resistance,
-    ///     Reversible,
+    ///     Adhesion, ContactHistory, ContactLaw, Damping, LinearNormal, PairKinematics, Reversible,
+    ///     Spring,
     /// };
     ///
     /// let law = ContactLaw {
-    ///     normal: NormalLaw { stiffness: 100.0, damping: Damping::NONE },
-    ///     tangential: Resistance::NONE,
-    ///     rolling: Resistance::NONE,
-    ///     torsion: Resistance::NONE,
+    ///     normal: LinearNormal { stiffness: 100.0, damping: Damping::NONE }.into(),
+    ///     tangential: Spring::NONE,
+    ///     rolling: Spring::NONE,
+    ///     torsion: Spring::NONE,
     ///     adhesion: Adhesion::Reversible(Reversible { max_force: 1.0e-3, stiffness: 10.0 }),
     /// };
     /// assert_eq!(law.range(), 1.0e-4);
@@ -196,8 +213,8 @@ impl ContactLaw {
         PairKernel::new(self).touching(k, h, dt)
     }
 
-    /// Elastic energy stored in a pair (J): `½ k_n δ² + ½ k_t |ξ_t|² + ½ k_r |ξ_r|²
-    /// + ½ k_o |ξ_o|²` in contact, plus the adhesive potential of the law (negative; zero
+    /// Elastic energy stored in a pair (J): the normal law's and the springs' energies in
+    /// contact (`½ k_n δ² + ½ k_t |ξ_t|² + ½ k_r |ξ_r|² + ½ k_o |ξ_o|²` for linear laws), plus the adhesive potential of the law (negative; zero
     /// once the pair is free) for radii `a_i`, `a_j` (m).
     pub fn elastic_energy(&self, overlap: f64, a_i: f64, a_j: f64, h: &ContactHistory) -> f64 {
         PairKernel::new(self).elastic_energy(overlap, a_i, a_j, h)

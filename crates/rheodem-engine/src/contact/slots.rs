@@ -1,7 +1,8 @@
 //! The contact history of a pair list, one slot per pair, in structure-of-arrays form.
 //!
 //! A touching pair under sliding friction alone reads and writes its tangential spring
-//! only; with the springs and the bridge flag in separate arrays, the force loop streams
+//! only; with the springs, the bridge flag and the normal law's state in separate arrays
+//! (the force loop touches the state only under a law that keeps one), the force loop streams
 //! 24 bytes per pair instead of a whole [`ContactHistory`] record (80 bytes), and the
 //! array it walks each step fits in a core's L2 cache on the standard problem. Stored
 //! (checkpoints) as a sequence of [`ContactHistory`] records, as before the split.
@@ -17,6 +18,7 @@ pub struct HistorySlots {
     rolling: Vec<DVec3>,
     torsion: Vec<DVec3>,
     bridge: Vec<bool>,
+    state: Vec<f64>,
 }
 
 impl HistorySlots {
@@ -36,6 +38,7 @@ impl HistorySlots {
         self.rolling.resize(n, DVec3::ZERO);
         self.torsion.resize(n, DVec3::ZERO);
         self.bridge.resize(n, false);
+        self.state.resize(n, 0.0);
     }
 
     /// The history of slot `k`.
@@ -45,6 +48,7 @@ impl HistorySlots {
             &self.rolling,
             &self.torsion,
             &self.bridge,
+            &self.state,
             k,
         )
     }
@@ -61,17 +65,19 @@ impl HistorySlots {
             rolling: &mut self.rolling,
             torsion: &mut self.torsion,
             bridge: &mut self.bridge,
+            state: &mut self.state,
         }
     }
 }
 
-/// Slot `k` of the four arrays as one record.
+/// Slot `k` of the five arrays as one record.
 #[inline(always)]
 fn record(
     tangential: &[DVec3],
     rolling: &[DVec3],
     torsion: &[DVec3],
     bridge: &[bool],
+    state: &[f64],
     k: usize,
 ) -> ContactHistory {
     ContactHistory {
@@ -79,6 +85,7 @@ fn record(
         rolling: rolling[k],
         torsion: torsion[k],
         bridge: bridge[k],
+        state: state[k],
     }
 }
 
@@ -90,6 +97,7 @@ impl FromIterator<ContactHistory> for HistorySlots {
             slots.rolling.push(h.rolling);
             slots.torsion.push(h.torsion);
             slots.bridge.push(h.bridge);
+            slots.state.push(h.state);
         }
         slots
     }
@@ -120,6 +128,8 @@ pub struct HistoryView<'a> {
     pub torsion: &'a mut [DVec3],
     /// Whether an irreversible law's bridge exists.
     pub bridge: &'a mut [bool],
+    /// The normal law's per-contact state.
+    pub state: &'a mut [f64],
 }
 
 impl<'a> HistoryView<'a> {
@@ -139,25 +149,35 @@ impl<'a> HistoryView<'a> {
         let (r0, r1) = self.rolling.split_at_mut(mid);
         let (o0, o1) = self.torsion.split_at_mut(mid);
         let (b0, b1) = self.bridge.split_at_mut(mid);
+        let (s0, s1) = self.state.split_at_mut(mid);
         (
             HistoryView {
                 tangential: t0,
                 rolling: r0,
                 torsion: o0,
                 bridge: b0,
+                state: s0,
             },
             HistoryView {
                 tangential: t1,
                 rolling: r1,
                 torsion: o1,
                 bridge: b1,
+                state: s1,
             },
         )
     }
 
     /// The history of slot `k`.
     pub fn get(&self, k: usize) -> ContactHistory {
-        record(self.tangential, self.rolling, self.torsion, self.bridge, k)
+        record(
+            self.tangential,
+            self.rolling,
+            self.torsion,
+            self.bridge,
+            self.state,
+            k,
+        )
     }
 
     /// Every slot's history in view, in order.
@@ -172,9 +192,10 @@ impl<'a> HistoryView<'a> {
         self.rolling[k] = h.rolling;
         self.torsion[k] = h.torsion;
         self.bridge[k] = h.bridge;
+        self.state[k] = h.state;
     }
 
-    /// Empties slot `k`: springs at zero, no bridge.
+    /// Empties slot `k`: springs and state at zero, no bridge.
     #[inline(always)]
     pub fn clear(&mut self, k: usize) {
         self.set(k, &ContactHistory::default());
@@ -192,6 +213,7 @@ mod tests {
             rolling: DVec3::new(3.0, x, 4.0),
             torsion: DVec3::new(5.0, 6.0, x),
             bridge: k % 2 == 1,
+            state: 0.5 * x,
         }
     }
 

@@ -2,27 +2,31 @@
 //! is built by the `rheodem` crate's `bench` module), in model units: the frictional law
 //! and its cohesive variants. The force loop's tests use them too.
 
-use super::{Adhesion, ContactLaw, Damping, LawKind, LawSpec, NormalLaw, Resistance, Strength};
+use super::{
+    Adhesion, ContactLaw, Damping, LawKind, LawSpec, LinearNormal, Resistance, Spring, Strength,
+};
 
 /// The bench's contact law: `k_n = 10⁴`, `k_t = 2/7 k_n`, `γ_n = 27.6941 m_ij`, no
 /// tangential damping, `μ = 0.5`.
 pub fn bench_law() -> ContactLaw {
     ContactLaw {
-        normal: NormalLaw {
+        normal: LinearNormal {
             stiffness: 1.0e4,
             damping: Damping {
                 per_mass: 27.6941,
                 ..Damping::NONE
             },
-        },
+        }
+        .into(),
         tangential: Resistance {
             stiffness: 2857.142857,
             damping: Damping::NONE,
             mu_static: 0.5,
             mu_dynamic: 0.5,
-        },
-        rolling: Resistance::NONE,
-        torsion: Resistance::NONE,
+        }
+        .into(),
+        rolling: Spring::NONE,
+        torsion: Spring::NONE,
         adhesion: Adhesion::None,
     }
 }

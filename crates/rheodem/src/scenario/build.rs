@@ -5,7 +5,10 @@ use super::spec::*;
 use super::{ScenarioError, invalid};
 use crate::Simulation;
 use crate::contact::adhesion::LawError;
-use crate::contact::{Adhesion, ContactLaw, ContactTable, Damping, LawSpec, NormalLaw, Resistance};
+use crate::contact::{
+    Adhesion, ContactLaw, ContactTable, Damping, LawSpec, LinearNormal, Normal, Resistance, Spring,
+    SpringKind,
+};
 use crate::domain::{Domain, ShearDynamics};
 use crate::generate::{
     MAX_INSERTION_FRACTION, Obstacle, Rng, gaussian_vector, insert_random, polydisperse_radii,
@@ -142,56 +145,40 @@ fn species_index(key: &str, name: &str, species: &[SpeciesSpec]) -> Result<u16, 
         })
 }
 
-fn normal_law(key: &str, n: &NormalSpec) -> Result<NormalLaw, ScenarioError> {
-    let k = positive(&format!("{key}.stiffness"), n.stiffness)?;
-    at_most_one(
-        key,
-        &[
-            ("restitution", n.restitution.is_some()),
-            ("damping", n.damping.is_some()),
-            ("damping_per_mass", n.damping_per_mass.is_some()),
-        ],
-    )?;
-    let damping = if let Some(e) = n.restitution {
-        if !(e > 0.0 && e <= 1.0) {
-            return Err(invalid(
-                format!("{key}.restitution"),
-                e,
-                "must lie in (0, 1]",
-            ));
-        }
-        if e == 1.0 {
-            Damping::NONE
-        } else {
-            Damping::from_restitution(e, k)
-        }
-    } else if let Some(g) = n.damping {
-        Damping {
-            fixed: non_negative(&format!("{key}.damping"), g)?,
-            ..Damping::NONE
-        }
-    } else if let Some(g) = n.damping_per_mass {
-        Damping {
-            per_mass: non_negative(&format!("{key}.damping_per_mass"), g)?,
-            ..Damping::NONE
-        }
-    } else {
-        Damping::NONE
-    };
-    Ok(NormalLaw {
-        stiffness: k,
-        damping,
-    })
+/// The normal law of `n` from the registry, and the linear law its springs' ratios refer
+/// to.
+fn normal_law(key: &str, n: &NormalSpec) -> Result<(Normal, LinearNormal), ScenarioError> {
+    let law = n.build().map_err(|e| law_error(key, e))?;
+    Ok((law, law.reference()))
 }
 
-fn resistance(
+/// A spring of the contact: none when not given, else the registry's law named by `law`
+/// (the linear spring–dashpot–Coulomb law by default) from its keys; ratios are taken of the
+/// normal law `normal`.
+fn spring(
     key: &str,
     r: &Option<ResistanceSpec>,
-    normal: &NormalLaw,
-) -> Result<Resistance, ScenarioError> {
+    normal: &LinearNormal,
+) -> Result<Spring, ScenarioError> {
     let Some(r) = r else {
-        return Ok(Resistance::NONE);
+        return Ok(Spring::NONE);
     };
+    let kind = match &r.law {
+        None => SpringKind::default(),
+        Some(name) => SpringKind::from_name(name)
+            .map_err(|reason| invalid(format!("{key}.law"), format!("\"{name}\""), reason))?,
+    };
+    match kind {
+        SpringKind::Linear => Ok(resistance(key, r, normal)?.into()),
+    }
+}
+
+/// The linear spring–dashpot–Coulomb law from its keys.
+fn resistance(
+    key: &str,
+    r: &ResistanceSpec,
+    normal: &LinearNormal,
+) -> Result<Resistance, ScenarioError> {
     at_most_one(
         key,
         &[
@@ -302,12 +289,12 @@ pub fn contact_table(s: &Scenario) -> Result<ContactTable, ScenarioError> {
     let mut pairs = Vec::new();
     for (k, c) in s.contacts.iter().enumerate() {
         let key = format!("contact[{k}]");
-        let normal = normal_law(&format!("{key}.normal"), &c.normal)?;
+        let (normal_law, normal) = normal_law(&format!("{key}.normal"), &c.normal)?;
         let law = ContactLaw {
-            normal,
-            tangential: resistance(&format!("{key}.friction"), &c.friction, &normal)?,
-            rolling: resistance(&format!("{key}.rolling"), &c.rolling, &normal)?,
-            torsion: resistance(&format!("{key}.torsion"), &c.torsion, &normal)?,
+            normal: normal_law,
+            tangential: spring(&format!("{key}.friction"), &c.friction, &normal)?,
+            rolling: spring(&format!("{key}.rolling"), &c.rolling, &normal)?,
+            torsion: spring(&format!("{key}.torsion"), &c.torsion, &normal)?,
             adhesion: adhesion(&format!("{key}.adhesion"), &c.adhesion)?,
         };
         match &c.species {
@@ -1087,7 +1074,7 @@ fn weight_within_limits(
         .min_by(|&a, &b| particles.mass[a].total_cmp(&particles.mass[b]));
     let Some(i) = lightest else { return Ok(()) };
     let sp = particles.species[i];
-    let k_n = laws.get(sp, sp).normal.stiffness;
+    let k_n = laws.get(sp, sp).normal.max_stiffness();
     let (m, a) = (particles.mass[i], particles.radius[i]);
     if m * g > max_overlap * a * k_n {
         return Err(invalid(

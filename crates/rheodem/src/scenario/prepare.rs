@@ -2,7 +2,7 @@
 //! frictionless contacts, then relaxation with the full contact laws.
 
 use crate::Simulation;
-use crate::contact::{Adhesion, Resistance};
+use crate::contact::{Adhesion, Spring};
 use crate::neighbor::NeighborError;
 use serde::{Deserialize, Serialize};
 
@@ -55,9 +55,9 @@ pub fn prepare(
     let laws = sim.laws.clone();
     let mut frictionless = laws.clone();
     frictionless.map(|law| {
-        law.tangential = Resistance::NONE;
-        law.rolling = Resistance::NONE;
-        law.torsion = Resistance::NONE;
+        law.tangential = Spring::NONE;
+        law.rolling = Spring::NONE;
+        law.torsion = Spring::NONE;
         law.adhesion = Adhesion::None;
     });
     sim.laws = frictionless;

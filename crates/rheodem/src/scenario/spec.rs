@@ -23,7 +23,7 @@
 //! duration = 0.05
 //! ```
 
-pub use crate::contact::LawSpec;
+pub use crate::contact::{LawSpec, NormalSpec};
 use crate::domain::ShearDynamics;
 use serde::{Deserialize, Serialize};
 
@@ -199,28 +199,14 @@ pub struct ContactSpec {
     pub adhesion: Option<LawSpec>,
 }
 
-/// Linear visco-elastic normal force. At most one of `restitution`, `damping`,
-/// `damping_per_mass` may be given; none means no damping.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct NormalSpec {
-    /// `k_n` (N/m), positive.
-    pub stiffness: f64,
-    /// Restitution coefficient `e` in (0, 1], the same for every pair.
-    #[serde(default)]
-    pub restitution: Option<f64>,
-    /// Fixed `γ_n` (kg/s), ≥ 0.
-    #[serde(default)]
-    pub damping: Option<f64>,
-    /// Mass-proportional damping `γ_n = γ̂ m_ij`, `γ̂` in 1/s, ≥ 0.
-    #[serde(default)]
-    pub damping_per_mass: Option<f64>,
-}
-
-/// A spring–dashpot–Coulomb resistance (friction, rolling, torsion).
+/// A spring with history (friction, rolling, torsion): its law's name from the registry
+/// (`law`, default `linear`, the spring–dashpot–Coulomb resistance) and that law's keys.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ResistanceSpec {
+    /// The spring law's name (`linear`, the default; see `rheodem contact laws`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub law: Option<String>,
     /// Spring stiffness (N/m); or give `stiffness_ratio`.
     #[serde(default)]
     pub stiffness: Option<f64>,

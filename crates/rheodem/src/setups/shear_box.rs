@@ -14,7 +14,7 @@
 
 use crate::analysis::{Estimate, block_average, halves_agree};
 use crate::cg::{FieldPoint, KernelShape, Material};
-use crate::contact::{LawKind, LawSpec, Strength};
+use crate::contact::{LawKind, LawSpec, NormalKind, Strength};
 use crate::domain::ShearDynamics;
 use crate::measure::Observables;
 use crate::scenario::spec::*;
@@ -478,6 +478,7 @@ impl ShearBoxSpec {
         let adhesion = (self.bond > 0.0)
             .then(|| LawSpec::new(self.cohesion, self.cohesion.at_strength(&strength)));
         let friction = (self.mu_p > 0.0).then(|| ResistanceSpec {
+            law: None,
             stiffness: None,
             stiffness_ratio: Some(2.0 / 7.0),
             damping: None,
@@ -513,12 +514,13 @@ impl ShearBoxSpec {
             }],
             contacts: vec![ContactSpec {
                 species: None,
-                normal: NormalSpec {
-                    stiffness: self.stiffness,
-                    restitution: Some(self.restitution),
-                    damping: None,
-                    damping_per_mass: None,
-                },
+                normal: NormalSpec::new(
+                    NormalKind::Linear,
+                    [
+                        ("stiffness", self.stiffness),
+                        ("restitution", self.restitution),
+                    ],
+                ),
                 friction,
                 rolling: None,
                 torsion: None,

@@ -3,7 +3,9 @@
 
 use glam::DVec3;
 use rheodem::Simulation;
-use rheodem::contact::{Adhesion, ContactLaw, ContactTable, Damping, NormalLaw, Resistance};
+use rheodem::contact::{
+    Adhesion, ContactLaw, ContactTable, Damping, LinearNormal, Resistance, Spring,
+};
 use rheodem::domain::Domain;
 use rheodem::particles::{Motion, Particles, Sphere};
 use rheodem::walls::Wall;
@@ -28,17 +30,18 @@ pub fn sphere(position: DVec3, velocity: DVec3, radius: f64) -> Sphere {
 /// Frictionless linear law with restitution `e` (or undamped when `e == 1`).
 pub fn normal_law(e: f64) -> ContactLaw {
     ContactLaw {
-        normal: NormalLaw {
+        normal: LinearNormal {
             stiffness: KN,
             damping: if e < 1.0 {
                 Damping::from_restitution(e, KN)
             } else {
                 Damping::NONE
             },
-        },
-        tangential: Resistance::NONE,
-        rolling: Resistance::NONE,
-        torsion: Resistance::NONE,
+        }
+        .into(),
+        tangential: Spring::NONE,
+        rolling: Spring::NONE,
+        torsion: Spring::NONE,
         adhesion: Adhesion::None,
     }
 }
@@ -48,10 +51,16 @@ pub fn frictional_law(e: f64, mu: f64) -> ContactLaw {
     let mut law = normal_law(e);
     law.tangential = Resistance {
         stiffness: 2.0 / 7.0 * KN,
-        damping: law.normal.damping.scaled(2.0 / 7.0),
+        damping: law
+            .normal
+            .linear()
+            .expect("a linear normal law")
+            .damping
+            .scaled(2.0 / 7.0),
         mu_static: mu,
         mu_dynamic: mu,
-    };
+    }
+    .into();
     law
 }
 

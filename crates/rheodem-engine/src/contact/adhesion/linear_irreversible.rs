@@ -2,7 +2,7 @@
 //! forms at contact, pulls `−f_max` while touching and `−(f_max − k_c S)` on separation, and
 //! ruptures past `S_c = f_max / k_c`; no attraction on approach.
 
-use super::parameters::LINEAR_LAW_PARAMETERS;
+use super::parameters::{self, LINEAR_LAW_PARAMETERS};
 use super::{AdhesiveLaw, LawError, Parameter, Parameters, ResolvedLaw, Strength};
 use crate::contact::lanes::Real;
 use serde::{Deserialize, Serialize};
@@ -37,7 +37,7 @@ impl AdhesiveLaw for LinearIrreversible {
     type Resolved = ResolvedLinear;
 
     fn from_parameters(p: &Parameters<'_>) -> Result<LinearIrreversible, LawError> {
-        let (max_force, stiffness) = p.linear()?;
+        let (max_force, stiffness) = parameters::linear_law(p)?;
         Ok(LinearIrreversible {
             max_force,
             stiffness,

@@ -29,12 +29,14 @@ pub mod parameters;
 pub mod reversible;
 pub mod willett;
 
+pub use super::parameters::{Bounds, LawError, Parameter, Parameters, Spec};
 pub use linear_irreversible::LinearIrreversible;
-pub use parameters::{Bounds, LawError, LawSpec, Parameter, Parameters, Strength};
+pub use parameters::{LawSpec, Strength};
 pub use reversible::Reversible;
 pub use willett::{LiquidBridge, willett_factor};
 
 use super::lanes::Real;
+use super::names;
 use serde::de::DeserializeOwned;
 use serde::{Deserialize, Serialize};
 use std::fmt::Debug;
@@ -328,9 +330,8 @@ impl LawKind {
     /// The law from its name: the name itself, an alias, or either in kebab-case; an
     /// error lists the known names.
     pub fn from_name(name: &str) -> Result<LawKind, LawError> {
-        let plain = name.trim().replace('-', "_");
         LAWS.iter()
-            .find(|l| l.name == plain || l.aliases.iter().any(|a| a.replace('-', "_") == plain))
+            .find(|l| names::spells(name, l.name, l.aliases))
             .map(|l| l.kind)
             .ok_or_else(|| LawError {
                 key: "law".into(),
@@ -342,13 +343,7 @@ impl LawKind {
     /// The known names with their aliases, for messages: `none (dry), reversible, …`.
     pub fn known() -> String {
         LAWS.iter()
-            .map(|l| {
-                if l.aliases.is_empty() {
-                    l.name.to_string()
-                } else {
-                    format!("{} ({})", l.name, l.aliases.join(", "))
-                }
-            })
+            .map(|l| names::with_aliases(l.name, l.aliases))
             .collect::<Vec<_>>()
             .join(", ")
     }

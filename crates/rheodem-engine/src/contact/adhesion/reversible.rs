@@ -2,7 +2,7 @@
 //! docs/model.md §2.4): `−f_max` in contact, `−f_max + k_c S` at separation `S` up to
 //! `δ_a = f_max / k_c`, the same on approach and separation.
 
-use super::parameters::LINEAR_LAW_PARAMETERS;
+use super::parameters::{self, LINEAR_LAW_PARAMETERS};
 use super::{AdhesiveLaw, LawError, Parameter, Parameters, ResolvedLaw, Strength};
 use crate::contact::lanes::Real;
 use serde::{Deserialize, Serialize};
@@ -26,7 +26,7 @@ impl AdhesiveLaw for Reversible {
     type Resolved = Reversible;
 
     fn from_parameters(p: &Parameters<'_>) -> Result<Reversible, LawError> {
-        let (max_force, stiffness) = p.linear()?;
+        let (max_force, stiffness) = parameters::linear_law(p)?;
         Ok(Reversible {
             max_force,
             stiffness,

@@ -3,7 +3,7 @@
 //! random filling of the mould.
 
 use crate::cg::KernelShape;
-use crate::contact::{ContactLaw, Damping, LawKind, LawSpec, NormalLaw, Resistance};
+use crate::contact::{ContactLaw, Damping, LawKind, LawSpec, LinearNormal, Resistance, Spring};
 use crate::generate::Rng;
 use crate::memory::{self, Bytes};
 use crate::neighbor::min_wedge_angle;
@@ -246,18 +246,20 @@ impl SplitBottomSpec {
             .build()
             .map_err(|e| law_error("cohesion", e))?;
         Ok(ContactLaw {
-            normal: NormalLaw {
+            normal: LinearNormal {
                 stiffness: self.stiffness,
                 damping,
-            },
+            }
+            .into(),
             tangential: Resistance {
                 stiffness: self.stiffness_ratio * self.stiffness,
                 damping: damping.scaled(self.damping_ratio),
                 mu_static: self.friction,
                 mu_dynamic: self.friction,
-            },
-            rolling: Resistance::NONE,
-            torsion: Resistance::NONE,
+            }
+            .into(),
+            rolling: Spring::NONE,
+            torsion: Spring::NONE,
             adhesion,
         })
     }

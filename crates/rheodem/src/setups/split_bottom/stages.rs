@@ -529,8 +529,8 @@ fn backstops(g: &Geometry) -> Vec<Wall> {
 }
 
 fn scale_damping(l: &mut ContactLaw, factor: f64) {
-    l.normal.damping = l.normal.damping.scaled(factor);
-    l.tangential.damping = l.tangential.damping.scaled(factor);
+    l.normal = l.normal.damping_scaled(factor);
+    l.tangential = l.tangential.damping_scaled(factor);
 }
 
 /// The time step of the rule (s).

@@ -1,8 +1,10 @@
-//! Spring–dashpot–Coulomb resistance with history (docs/model.md §2.3), shared by sliding
-//! friction, rolling resistance and torsion resistance.
+//! The linear spring–dashpot–Coulomb resistance with history (docs/model.md §2.3), used
+//! for sliding friction, rolling resistance and torsion resistance.
 
-use super::lanes::{Real, V3};
-use super::normal::Damping;
+use super::super::damping::Damping;
+use super::super::kernel::Touch;
+use super::super::lanes::{Real, V3};
+use super::SpringModel;
 use glam::DVec3;
 use serde::{Deserialize, Serialize};
 
@@ -136,6 +138,56 @@ impl Resistance {
         };
         *xi = V3::select(slip, reset, *xi);
         (V3::select(slip, capped, trial), slip)
+    }
+}
+
+impl SpringModel for Resistance {
+    const NAME: &'static str = "linear";
+    const ALIASES: &'static [&'static str] = &["coulomb"];
+    const SUMMARY: &'static str = "Linear spring and dashpot capped by a Coulomb limit, -k ξ - γ v with |f| ≤ μ f_n (Cundall & Strack 1979; Luding 2008).";
+
+    #[inline(always)]
+    fn is_active(&self) -> bool {
+        Resistance::is_active(self)
+    }
+
+    #[inline(always)]
+    fn in_plane_lanes<R: Real>(
+        &self,
+        xi: &mut V3<R>,
+        n: V3<R>,
+        v: V3<R>,
+        k: &Touch<R>,
+        f_rep: R,
+        dt: f64,
+    ) -> (V3<R>, R::Mask) {
+        let gamma = self.damping.in_lanes(k.reduced_mass);
+        self.in_plane(xi, n, v, gamma, f_rep, dt)
+    }
+
+    #[inline(always)]
+    fn along_normal_lanes<R: Real>(
+        &self,
+        xi: &mut V3<R>,
+        n: V3<R>,
+        v: V3<R>,
+        k: &Touch<R>,
+        f_rep: R,
+        dt: f64,
+    ) -> (V3<R>, R::Mask) {
+        let gamma = self.damping.in_lanes(k.reduced_mass);
+        self.along_normal(xi, n, v, gamma, f_rep, dt)
+    }
+
+    fn energy(&self, xi: DVec3, _overlap: f64, _a_i: f64, _a_j: f64) -> f64 {
+        0.5 * (self.stiffness * xi.length_squared())
+    }
+
+    fn damping_scaled(&self, factor: f64) -> Resistance {
+        Resistance {
+            damping: self.damping.scaled(factor),
+            ..*self
+        }
     }
 }
 

@@ -1,0 +1,252 @@
+//! Springs with history of a touching pair: sliding friction, rolling resistance and
+//! torsion resistance (docs/model.md §2.3), and the registry of their laws.
+//!
+//! Each law is one file implementing [`SpringModel`]: its name and aliases, whether it acts
+//! at all, the force of a spring that lives in the tangent plane (sliding, rolling) or along
+//! the normal (torsion) in lanes, and its stored energy. The [`spring_laws!`] line below
+//! registers them; it generates the [`Spring`] enum each of a contact law's three springs
+//! holds (matched once per lane group in the pair loop, no dynamic dispatch), the names
+//! [`SpringKind`] scenario files accept, and the list [`SPRING_LAWS`]. No other file lists
+//! the spring laws.
+//!
+//! Registered laws:
+//! - [`Resistance`]: a linear spring and dashpot capped by a Coulomb limit.
+//!
+//! Adding a law: write one file beside `linear.rs` with a parameter struct implementing
+//! [`SpringModel`], declare the module below, and add one line to the `spring_laws!`
+//! invocation. As for the normal laws, the first law of the line is stored as its bare
+//! parameters and every other law tagged with its variant name.
+
+pub mod linear;
+
+pub use linear::Resistance;
+
+use super::kernel::Touch;
+use super::lanes::{Real, V3};
+use super::names::{self, ModelInfo};
+use glam::DVec3;
+use serde::Serialize;
+use serde::de::DeserializeOwned;
+use std::fmt::Debug;
+
+/// A spring law with its parameters in SI units, as the pair loop uses it.
+pub trait SpringModel: Copy + Debug + PartialEq + Serialize + DeserializeOwned {
+    /// The name scenario files, options and results use (`snake_case`).
+    const NAME: &'static str;
+    /// Other spellings accepted for the name (kebab-case is always accepted too).
+    const ALIASES: &'static [&'static str];
+    /// One line saying what the law is, with its source.
+    const SUMMARY: &'static str;
+
+    /// Whether the spring can ever produce a force (the pair loop skips it otherwise).
+    fn is_active(&self) -> bool;
+
+    /// Advances a spring `xi` (m) that lives in the tangent plane of the contact `k` with
+    /// unit normal `n`, driven by the relative velocity `v` (m/s, in the tangent plane) over
+    /// `dt` (s), in lanes; returns the force (N) and whether the spring slips. `f_rep ≥ 0`
+    /// (N) is the repulsive normal force that sets the Coulomb limit.
+    fn in_plane_lanes<R: Real>(
+        &self,
+        xi: &mut V3<R>,
+        n: V3<R>,
+        v: V3<R>,
+        k: &Touch<R>,
+        f_rep: R,
+        dt: f64,
+    ) -> (V3<R>, R::Mask);
+
+    /// Like [`SpringModel::in_plane_lanes`] for a spring that lives along the normal `n`
+    /// (torsion), `v` along `n`.
+    fn along_normal_lanes<R: Real>(
+        &self,
+        xi: &mut V3<R>,
+        n: V3<R>,
+        v: V3<R>,
+        k: &Touch<R>,
+        f_rep: R,
+        dt: f64,
+    ) -> (V3<R>, R::Mask);
+
+    /// Energy (J, ≥ 0) stored in a spring stretched by `xi` (m) in a contact of overlap `δ`
+    /// (m) between radii `a_i`, `a_j` (m).
+    fn energy(&self, xi: DVec3, overlap: f64, a_i: f64, a_j: f64) -> f64;
+
+    /// The same law with its dashpot scaled by `factor` (used to quench a packing).
+    fn damping_scaled(&self, factor: f64) -> Self;
+}
+
+/// Generates, from one line per law, the enum and the list every part of rheodem takes the
+/// spring laws from (see the module documentation).
+macro_rules! spring_laws {
+    (
+        $(#[$bare_doc:meta])* $bare:ident => $bare_law:ty
+        $(; $(#[$doc:meta])* $variant:ident => $law:ty)* $(;)?
+    ) => {
+        /// A spring law (sliding, rolling or torsion) with its parameters (SI units).
+        #[derive(Clone, Copy, Debug, PartialEq)]
+        pub enum Spring {
+            $(#[$bare_doc])* $bare($bare_law),
+            $($(#[$doc])* $variant($law),)*
+        }
+
+        /// The name of a spring law, as scenario files, options and results give it.
+        #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+        pub enum SpringKind {
+            $(#[$bare_doc])* #[default] $bare,
+            $($(#[$doc])* $variant,)*
+        }
+
+        /// Every registered spring law, the default first.
+        pub const SPRING_LAWS: &[ModelInfo<SpringKind>] = &[
+            ModelInfo {
+                kind: SpringKind::$bare,
+                name: <$bare_law as SpringModel>::NAME,
+                aliases: <$bare_law as SpringModel>::ALIASES,
+                summary: <$bare_law as SpringModel>::SUMMARY,
+                parameters: &[],
+            },
+            $(ModelInfo {
+                kind: SpringKind::$variant,
+                name: <$law as SpringModel>::NAME,
+                aliases: <$law as SpringModel>::ALIASES,
+                summary: <$law as SpringModel>::SUMMARY,
+                parameters: &[],
+            },)*
+        ];
+
+        impl Spring {
+            /// The law's name.
+            pub fn kind(&self) -> SpringKind {
+                match self {
+                    Spring::$bare(_) => SpringKind::$bare,
+                    $(Spring::$variant(_) => SpringKind::$variant,)*
+                }
+            }
+
+            /// [`SpringModel::is_active`].
+            #[inline(always)]
+            pub fn is_active(&self) -> bool {
+                match self {
+                    Spring::$bare(law) => law.is_active(),
+                    $(Spring::$variant(law) => law.is_active(),)*
+                }
+            }
+
+            /// [`SpringModel::in_plane_lanes`] of the law.
+            #[inline(always)]
+            pub fn in_plane_lanes<R: Real>(
+                &self,
+                xi: &mut V3<R>,
+                n: V3<R>,
+                v: V3<R>,
+                k: &Touch<R>,
+                f_rep: R,
+                dt: f64,
+            ) -> (V3<R>, R::Mask) {
+                match self {
+                    Spring::$bare(law) => law.in_plane_lanes(xi, n, v, k, f_rep, dt),
+                    $(Spring::$variant(law) => law.in_plane_lanes(xi, n, v, k, f_rep, dt),)*
+                }
+            }
+
+            /// [`SpringModel::along_normal_lanes`] of the law.
+            #[inline(always)]
+            pub fn along_normal_lanes<R: Real>(
+                &self,
+                xi: &mut V3<R>,
+                n: V3<R>,
+                v: V3<R>,
+                k: &Touch<R>,
+                f_rep: R,
+                dt: f64,
+            ) -> (V3<R>, R::Mask) {
+                match self {
+                    Spring::$bare(law) => law.along_normal_lanes(xi, n, v, k, f_rep, dt),
+                    $(Spring::$variant(law) => law.along_normal_lanes(xi, n, v, k, f_rep, dt),)*
+                }
+            }
+
+            /// [`SpringModel::energy`] (J) of the law.
+            pub fn energy(&self, xi: DVec3, overlap: f64, a_i: f64, a_j: f64) -> f64 {
+                match self {
+                    Spring::$bare(law) => law.energy(xi, overlap, a_i, a_j),
+                    $(Spring::$variant(law) => law.energy(xi, overlap, a_i, a_j),)*
+                }
+            }
+
+            /// The same law with its dashpot scaled by `factor`.
+            pub fn damping_scaled(&self, factor: f64) -> Spring {
+                match self {
+                    Spring::$bare(law) => Spring::$bare(law.damping_scaled(factor)),
+                    $(Spring::$variant(law) => Spring::$variant(law.damping_scaled(factor)),)*
+                }
+            }
+        }
+
+        names::bare_or_tagged!(Spring, $bare => $bare_law $(, $variant => $law)*);
+
+        impl From<$bare_law> for Spring {
+            fn from(law: $bare_law) -> Spring {
+                Spring::$bare(law)
+            }
+        }
+
+        $(
+            impl From<$law> for Spring {
+                fn from(law: $law) -> Spring {
+                    Spring::$variant(law)
+                }
+            }
+        )*
+    };
+}
+
+spring_laws! {
+    /// The linear spring and dashpot with a Coulomb limit (Shi et al. 2020, Eqs. 5–8).
+    Linear => Resistance;
+}
+
+impl Spring {
+    /// A spring that never acts.
+    pub const NONE: Spring = Spring::Linear(Resistance::NONE);
+
+    /// The linear law's parameters, if the spring is linear.
+    pub fn linear(&self) -> Option<&Resistance> {
+        match self {
+            Spring::Linear(r) => Some(r),
+        }
+    }
+}
+
+impl Default for Spring {
+    fn default() -> Spring {
+        Spring::NONE
+    }
+}
+
+names::kind_names!(SpringKind, SPRING_LAWS, "spring law");
+
+#[cfg(test)]
+mod tests {
+    use super::super::damping::Damping;
+    use super::*;
+
+    #[test]
+    fn the_linear_spring_is_stored_as_before_the_registry() {
+        let law = Resistance {
+            stiffness: 2857.142857,
+            damping: Damping::NONE,
+            mu_static: 0.5,
+            mu_dynamic: 0.4,
+        };
+        let spring = Spring::from(law);
+        let packed = rmp_serde::to_vec(&spring).expect("msgpack");
+        assert_eq!(packed, rmp_serde::to_vec(&law).expect("msgpack"));
+        let back: Spring = rmp_serde::from_slice(&packed).expect("reads back");
+        assert_eq!(back, spring);
+        assert_eq!(
+            serde_json::to_string(&spring).expect("json"),
+            serde_json::to_string(&law).expect("json")
+        );
+    }
+}
