@@ -139,18 +139,25 @@ def test_a_measurement_fires_at_its_steps_and_times(small_scenario):
     sim.run(steps=35)
     assert steps == [7, 14, 21, 28, 35]
     # At the first step whose time (the sum of the steps) reaches each multiple of dt.
-    period, t, next_time, expected = 10 * sim.dt, 0.0, 10 * sim.dt, []
+    period, t, k, expected = 10 * sim.dt, 0.0, 1, []
     for _ in range(35):
         t += sim.dt
-        if t >= next_time:
+        if t >= k * period:
             expected.append(t)
-            next_time = (np.floor(t / period) + 1.0) * period
+            while k * period <= t:
+                k += 1
     assert times == expected and len(times) == 3
     sim.detach(handle)
     sim.run(steps=10)
     assert steps == [7, 14, 21, 28, 35]
     with pytest.raises(ValueError, match="handle"):
         sim.detach(handle)
+    # A period equal to the time step fires at (nearly) every step and never twice at one.
+    fired = []
+    every_step = sim.attach(lambda s: fired.append(s.step_count), dt=sim.dt)
+    sim.run(steps=20)
+    sim.detach(every_step)
+    assert 18 <= len(fired) <= 20 and len(set(fired)) == len(fired)
     # The measurement reads the state; it cannot step it.
     sim.attach(lambda s: s.step(), every=1)
     with pytest.raises(rheodem.RunError, match="cannot step"):

@@ -23,8 +23,10 @@ const SIGNAL_CHECK: Duration = Duration::from_millis(100);
 struct Interrupted;
 
 /// Runs `work` on a thread of `pool` with the interpreter lock released, looking for
-/// Ctrl-C meanwhile. `work` gets a flag that turns true on Ctrl-C and must then stop
-/// (through [`stop_if`]); the interrupt is raised once it has.
+/// Ctrl-C meanwhile. `work` gets a flag that turns true on Ctrl-C and should then stop
+/// (through [`stop_if`]); the interrupt is raised once `work` has ended, however it ended
+/// (a `work` that finished first has still done its job, but the caller asked to stop).
+/// A panic of `work` other than that stop is passed on.
 fn interruptible<T: Send>(
     py: Python<'_>,
     pool: &rayon::ThreadPool,
@@ -33,7 +35,7 @@ fn interruptible<T: Send>(
     let stop = AtomicBool::new(false);
     let (sender, mut receiver) = std::sync::mpsc::channel();
     let mut interrupt = None;
-    std::thread::scope(|scope| {
+    let outcome = std::thread::scope(|scope| {
         let stop = &stop;
         scope.spawn(move || {
             let outcome = catch_unwind(AssertUnwindSafe(|| pool.install(|| work(stop))));
@@ -44,7 +46,7 @@ fn interruptible<T: Send>(
             // A unique borrow is `Send` where the receiver is not `Sync`.
             let rx = &mut receiver;
             match py.detach(move || rx.recv_timeout(SIGNAL_CHECK)) {
-                Ok(outcome) => return outcome.map_err(Some),
+                Ok(outcome) => return Some(outcome),
                 Err(std::sync::mpsc::RecvTimeoutError::Timeout) => {
                     if interrupt.is_none()
                         && let Err(e) = py.check_signals()
@@ -53,15 +55,18 @@ fn interruptible<T: Send>(
                         stop.store(true, Ordering::Relaxed);
                     }
                 }
-                Err(std::sync::mpsc::RecvTimeoutError::Disconnected) => return Err(None),
+                Err(std::sync::mpsc::RecvTimeoutError::Disconnected) => return None,
             }
         }
-    })
-    .map_err(|payload| match (interrupt, payload) {
-        (Some(e), _) => e,
-        (None, Some(p)) => resume_unwind(p),
-        (None, None) => RunError::new_err("the run's thread ended without an outcome"),
-    })
+    });
+    match (outcome, interrupt) {
+        (Some(Err(payload)), _) if !payload.is::<Interrupted>() => resume_unwind(payload),
+        (_, Some(e)) => Err(e),
+        (Some(Ok(value)), None) => Ok(value),
+        _ => Err(RunError::new_err(
+            "the run's thread ended without an outcome",
+        )),
+    }
 }
 
 /// Stops the run (unwinding to [`interruptible`]) once `stop` is set.

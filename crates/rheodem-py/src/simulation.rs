@@ -8,10 +8,13 @@ use crate::views::{Field, Lent, view};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
+use pyo3::{PyTraverseError, PyVisit};
 use rheodem::run::{ScenarioState, read_checkpoint, write_checkpoint};
 use rheodem::scenario::Resolved;
 use serde::{Deserialize, Serialize};
 use std::path::PathBuf;
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
 /// Longest stretch of steps between two looks at Ctrl-C (and other signals).
@@ -22,33 +25,47 @@ const SIGNAL_CHECK: Duration = Duration::from_millis(50);
 enum Trigger {
     /// At every step that is a multiple of this count.
     Every(u64),
-    /// At the first step at or after each multiple of this time (s).
+    /// At the first step at or after each multiple of a period.
     Period {
         /// The period (s).
         dt: f64,
-        /// The next time it fires (s).
-        next: f64,
+        /// The multiple of the period at which it fires next, always after the current
+        /// time.
+        next: u64,
     },
 }
 
 impl Trigger {
-    /// The next step at which it fires after `step` (for [`Trigger::Every`]).
-    fn next_step(&self, step: u64) -> Option<u64> {
+    /// A period trigger whose next multiple comes after `time`.
+    fn period(dt: f64, time: f64) -> Trigger {
+        let mut next = (time / dt).floor().max(0.0) as u64;
+        while next as f64 * dt <= time {
+            next += 1;
+        }
+        Trigger::Period { dt, next }
+    }
+
+    /// The next step at which it fires after `step`, or the time (s) from which it fires.
+    fn next(&self, step: u64) -> (u64, f64) {
         match *self {
-            Trigger::Every(n) => Some((step / n + 1) * n),
-            Trigger::Period { .. } => None,
+            Trigger::Every(n) => (
+                (step / n).saturating_add(1).saturating_mul(n),
+                f64::INFINITY,
+            ),
+            Trigger::Period { dt, next } => (u64::MAX, next as f64 * dt),
         }
     }
 
-    /// Whether it fires at `step`, `time`; a period moves on to its next multiple.
+    /// Whether it fires at `step`, `time`; a period moves on to its next multiple after
+    /// `time`.
     fn fires(&mut self, step: u64, time: f64) -> bool {
-        match self {
-            Trigger::Every(n) => step.is_multiple_of(*n),
+        match *self {
+            Trigger::Every(n) => step.is_multiple_of(n),
             Trigger::Period { dt, next } => {
-                if time < *next {
+                if time < next as f64 * dt {
                     return false;
                 }
-                *next = ((time / *dt).floor() + 1.0) * *dt;
+                *self = Trigger::period(dt, time);
                 true
             }
         }
@@ -98,8 +115,33 @@ pub struct Simulation {
     lent: Lent,
     actions: Vec<Action>,
     next_action: u64,
-    /// Whether an attached measurement is running (the simulation is then read-only).
-    in_action: bool,
+    /// Whether an attached measurement is running (the simulation is then read-only);
+    /// shared so that it is set and cleared without borrowing the simulation.
+    in_action: Arc<AtomicBool>,
+}
+
+/// Clears the flag of a running measurement when the measurements are done, however they
+/// end.
+struct Acting(Arc<AtomicBool>);
+
+impl Acting {
+    fn start(flag: &Arc<AtomicBool>) -> Acting {
+        flag.store(true, Ordering::Relaxed);
+        Acting(flag.clone())
+    }
+}
+
+impl Drop for Acting {
+    fn drop(&mut self) {
+        self.0.store(false, Ordering::Relaxed);
+    }
+}
+
+/// The error of a simulation used by another thread while it runs or is read.
+fn busy(e: impl std::fmt::Display) -> PyErr {
+    RunError::new_err(format!(
+        "the simulation is in use by another thread (it is running or being read): {e}"
+    ))
 }
 
 fn pool_of(threads: Option<usize>, default: usize) -> PyResult<(rayon::ThreadPool, usize)> {
@@ -135,7 +177,7 @@ impl Simulation {
             lent: Lent::default(),
             actions: Vec::new(),
             next_action: 0,
-            in_action: false,
+            in_action: Arc::new(AtomicBool::new(false)),
         }
     }
 
@@ -150,7 +192,7 @@ impl Simulation {
     }
 
     fn writable(&self) -> PyResult<()> {
-        if self.in_action {
+        if self.in_action.load(Ordering::Relaxed) {
             return Err(RunError::new_err(
                 "a measurement attached to a simulation reads its state; it cannot step it",
             ));
@@ -175,22 +217,18 @@ impl Simulation {
 
     /// The next step and time at which an attached measurement fires.
     fn next_stop(&self) -> (u64, f64) {
-        let step = self.sim.step;
-        let mut stop = u64::MAX;
-        let mut mark = f64::INFINITY;
-        for a in &self.actions {
-            match a.trigger {
-                Trigger::Period { next, .. } => mark = mark.min(next),
-                t => stop = stop.min(t.next_step(step).unwrap_or(u64::MAX)),
-            }
-        }
-        (stop, mark)
+        self.actions
+            .iter()
+            .map(|a| a.trigger.next(self.sim.step))
+            .fold((u64::MAX, f64::INFINITY), |(s, t), (s2, t2)| {
+                (s.min(s2), t.min(t2))
+            })
     }
 
     fn array<'py>(slf: &Bound<'py, Self>, field: Field) -> PyResult<Bound<'py, PyAny>> {
         let py = slf.py();
         let owner = slf.clone().into_any().unbind();
-        let mut me = slf.borrow_mut();
+        let mut me = slf.try_borrow_mut().map_err(busy)?;
         let me = &mut *me;
         view(py, &me.sim.particles, &mut me.lent, field, owner)
     }
@@ -302,7 +340,7 @@ impl Simulation {
     fn run(slf: &Bound<'_, Self>, steps: Option<u64>, duration: Option<f64>) -> PyResult<()> {
         let py = slf.py();
         let target = {
-            let me = slf.borrow();
+            let me = slf.try_borrow().map_err(busy)?;
             me.writable()?;
             let now = me.sim.step;
             match (steps, duration) {
@@ -322,8 +360,8 @@ impl Simulation {
             }
         };
         loop {
-            let fired = {
-                let mut me = slf.borrow_mut();
+            let (fired, flag) = {
+                let mut me = slf.try_borrow_mut().map_err(busy)?;
                 if me.sim.step >= target {
                     break;
                 }
@@ -339,17 +377,18 @@ impl Simulation {
                         fired.push(a.callable.clone_ref(py));
                     }
                 }
-                fired
+                (fired, me.in_action.clone())
             };
-            py.check_signals()?;
+            // The measurements of the step first, so that Ctrl-C loses none.
             if !fired.is_empty() {
-                slf.borrow_mut().in_action = true;
-                let outcome = fired.iter().try_for_each(|f| f.call1(py, (slf,)).map(drop));
-                slf.borrow_mut().in_action = false;
-                outcome?;
+                let _acting = Acting::start(&flag);
+                for f in &fired {
+                    f.call1(py, (slf,))?;
+                }
             }
+            py.check_signals()?;
         }
-        let me = slf.borrow();
+        let me = slf.try_borrow().map_err(busy)?;
         me.sim
             .check_sanity()
             .map_err(|cause| RunError::new_err(format!("at step {}: {cause}", me.sim.step)))
@@ -379,10 +418,7 @@ impl Simulation {
                 ));
             }
             (Some(n), None) => Trigger::Every(n),
-            (None, Some(p)) if p.is_finite() && p > 0.0 => Trigger::Period {
-                dt: p,
-                next: ((self.sim.time / p).floor() + 1.0) * p,
-            },
+            (None, Some(p)) if p.is_finite() && p > 0.0 => Trigger::period(p, self.sim.time),
             (None, Some(p)) => {
                 return Err(PyValueError::new_err(format!(
                     "dt = {p}: must be a positive number of seconds"
@@ -553,6 +589,19 @@ impl Simulation {
         let ends = self.ends_a_step();
         let o = py.detach(|| pool.install(|| contacts::observables(sim, ends)));
         from_json(py, &serde_json::to_string(&o).unwrap_or_default())
+    }
+
+    /// The attached callables, for Python's cycle collector.
+    fn __traverse__(&self, visit: PyVisit<'_>) -> Result<(), PyTraverseError> {
+        for a in &self.actions {
+            visit.call(&a.callable)?;
+        }
+        Ok(())
+    }
+
+    /// Drops the attached callables (Python's cycle collector breaking a cycle).
+    fn __clear__(&mut self) {
+        self.actions.clear();
     }
 
     fn __repr__(&self) -> String {

@@ -6,8 +6,9 @@
 //! view still uses to that view's [`Buffer`] and goes on with a copy. A view therefore
 //! always shows the state at the step it was taken: two reads within a step share their
 //! memory, and a view held across a step keeps the earlier values (the simulation has moved
-//! on in new memory). A step after which no view of an array is alive copies nothing. A
-//! view's buffer also keeps the simulation object alive while the memory is still its own.
+//! on in new memory). A step after which no view of an array is alive copies nothing. While
+//! the memory is still the simulation's, a view's buffer keeps the simulation object alive;
+//! the simulation holds its lent slots weakly, so no cycle forms.
 
 use glam::DVec3;
 use numpy::ndarray::{ArrayView1, ArrayView2};
@@ -15,7 +16,7 @@ use numpy::{PyArray1, PyArray2};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use rheodem::particles::Particles;
-use std::sync::{Arc, Mutex, PoisonError};
+use std::sync::{Arc, Mutex, PoisonError, Weak};
 
 /// A particle array that can be viewed.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -52,23 +53,29 @@ enum Owned {
     Small(Vec<u16>),
 }
 
-/// What a [`Buffer`] holds: nothing while the simulation owns the memory, the array once
-/// the simulation has moved on.
-#[derive(Default)]
-struct Slot(Mutex<Option<Owned>>);
+/// Whose memory a view shows.
+#[allow(dead_code)]
+enum Holder {
+    /// The simulation's (the Python object, kept alive while the view lives).
+    Simulation(Py<PyAny>),
+    /// An array the simulation handed over.
+    Array(Owned),
+}
+
+/// What the [`Buffer`]s of one lent array share.
+struct Slot(Mutex<Holder>);
 
 /// The base object of a view (`view.base`): keeps the viewed memory alive. Not made from
 /// Python.
 #[pyclass(module = "rheodem._rheodem", frozen)]
 pub struct Buffer {
     _slot: Arc<Slot>,
-    /// The simulation the memory belongs to while it still owns it.
-    _owner: Option<Py<PyAny>>,
 }
 
-/// The arrays a simulation has lent, each with the slot its views share.
+/// The arrays a simulation has lent, each with the slot its views share (held weakly: a
+/// slot lives as long as a view of it).
 #[derive(Default)]
-pub struct Lent(Vec<(Field, Arc<Slot>)>);
+pub struct Lent(Vec<(Field, Weak<Slot>)>);
 
 impl Field {
     /// The array of `self` in `p`, replaced there by a copy.
@@ -97,21 +104,28 @@ impl Lent {
     /// forgets the rest. Called before anything changes `p`.
     pub fn release(&mut self, p: &mut Particles) {
         for (field, slot) in self.0.drain(..) {
-            if Arc::strong_count(&slot) > 1 {
+            if let Some(slot) = slot.upgrade() {
                 let owned = field.take(p);
-                *slot.0.lock().unwrap_or_else(PoisonError::into_inner) = Some(owned);
+                // The simulation object is let go with it.
+                *slot.0.lock().unwrap_or_else(PoisonError::into_inner) = Holder::Array(owned);
             }
         }
     }
 
-    /// The slot of `field`'s current memory, made if no live view shares it.
-    fn slot(&mut self, field: Field) -> Arc<Slot> {
-        self.0.retain(|(_, s)| Arc::strong_count(s) > 1);
-        if let Some((_, s)) = self.0.iter().find(|(f, _)| *f == field) {
-            return s.clone();
+    /// The slot of `field`'s current memory, made (holding `owner`) if no live view
+    /// shares it.
+    fn slot(&mut self, field: Field, owner: Py<PyAny>) -> Arc<Slot> {
+        self.0.retain(|(_, s)| s.strong_count() > 0);
+        if let Some(s) = self
+            .0
+            .iter()
+            .find(|(f, _)| *f == field)
+            .and_then(|(_, s)| s.upgrade())
+        {
+            return s;
         }
-        let s = Arc::new(Slot::default());
-        self.0.push((field, s.clone()));
+        let s = Arc::new(Slot(Mutex::new(Holder::Simulation(owner))));
+        self.0.push((field, Arc::downgrade(&s)));
         s
     }
 }
@@ -128,14 +142,13 @@ pub fn view<'py>(
     let base = Bound::new(
         py,
         Buffer {
-            _slot: lent.slot(field),
-            _owner: Some(owner),
+            _slot: lent.slot(field, owner),
         },
     )?
     .into_any();
     // SAFETY: each array's memory stays where it is while `base` lives: the simulation
-    // never reallocates or frees a lent array (it hands it to the buffer first, see
-    // `Lent::release`), and `base` keeps the simulation alive meanwhile. `DVec3` is three
+    // never reallocates or frees a lent array (it hands it to the slot first, see
+    // `Lent::release`), and the slot keeps the simulation alive meanwhile. `DVec3` is three
     // `f64` in a row (`repr(C)`), so N of them are an (N, 3) C-ordered `f64` array.
     let array = unsafe {
         match field {
