@@ -201,6 +201,20 @@ def test_ctrl_c_stops_between_steps_and_the_run_goes_on(small_scenario):
     assert sim.step_count == stopped + 5
 
 
+def test_a_simulation_running_in_another_thread_is_in_use():
+    sim = rheodem.Simulation.standard_problem(threads=1)
+    started = threading.Event()
+    sim.attach(lambda s: started.set(), every=500)
+    runner = threading.Thread(target=sim.run, kwargs={"steps": 3000})
+    runner.start()
+    assert started.wait(timeout=60)
+    with pytest.raises(rheodem.RunError, match="in use by another thread"):
+        while True:  # until a read falls into a stretch of steps (almost at once)
+            sim.positions
+    runner.join()
+    assert sim.step_count == 3000
+
+
 def test_errors_name_the_key_and_the_allowed_range(small_scenario):
     with pytest.raises(rheodem.ScenarioError) as e:
         rheodem.Simulation(

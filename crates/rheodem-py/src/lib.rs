@@ -12,6 +12,7 @@ mod results;
 mod scenario;
 mod setups;
 mod simulation;
+mod threads;
 mod views;
 
 use pyo3::prelude::*;

@@ -1,8 +1,9 @@
 //! The registered set-ups, a scenario's run into its directory, and the fitted laws, run
 //! from Python through the same driver as the command line.
 
-use crate::errors::{RunError, from_json, other, run_error, scenario_error};
+use crate::errors::{RunError, from_json, run_error, scenario_error};
 use crate::scenario::Scenario;
+use crate::threads::pool;
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::{PyBool, PyDict, PyFloat, PyInt, PyString};
@@ -74,22 +75,6 @@ fn stop_if(stop: &AtomicBool) {
     if stop.load(Ordering::Relaxed) {
         resume_unwind(Box::new(Interrupted));
     }
-}
-
-fn pool(threads: Option<usize>) -> PyResult<(rayon::ThreadPool, usize)> {
-    let cpus = std::thread::available_parallelism().map_or(1, |n| n.get());
-    let n = threads.unwrap_or(cpus);
-    if n == 0 || n > 4 * cpus {
-        return Err(PyValueError::new_err(format!(
-            "threads = {n}: must lie in [1, {}] (4 × the {cpus} logical CPUs of this machine)",
-            4 * cpus
-        )));
-    }
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(n)
-        .build()
-        .map_err(other)?;
-    Ok((pool, n))
 }
 
 /// A Python value for the field `f` as the set-up's spec takes it; an error names the key.
@@ -200,7 +185,7 @@ pub fn run_setup<'py>(
             from_run.as_deref().unwrap_or(Path::new("")),
         )));
     }
-    let (pool, threads) = pool(threads)?;
+    let (pool, threads) = pool(threads, None)?;
     let options = RunOptions {
         dir: &out,
         threads,
@@ -294,14 +279,14 @@ pub fn run_scenario<'py>(
                 "give a scenario, or resume=True to continue the run in `out`",
             ));
         };
-        let (pool, n) = pool(threads)?;
+        let (pool, n) = pool(threads, None)?;
         let (inner, base) = (sc.inner.clone(), sc.base_dir.clone());
         let out = &out;
         interruptible(py, &pool, move |_| Run::start(inner, &base, out, n, force))?
             .map_err(run_error)?
     };
     // A resumed run keeps its thread count unless told otherwise (bit-identical results).
-    let (pool, _) = pool(threads.or(Some(run.threads)))?;
+    let (pool, _) = pool(threads, Some(run.threads))?;
     let out_dir = &out;
     interruptible(py, &pool, |stop| run.advance(out_dir, |_| stop_if(stop)))?.map_err(run_error)?;
     let summary = std::fs::read_to_string(out.join("summary.json")).map_err(|e| {

@@ -2,8 +2,9 @@
 //! contacts as a table, custom measurements on a trigger, checkpoints.
 
 use crate::contacts;
-use crate::errors::{RunError, from_json, other, run_error, scenario_error};
+use crate::errors::{RunError, from_json, run_error, scenario_error};
 use crate::scenario::Scenario;
+use crate::threads::pool;
 use crate::views::{Field, Lent, view};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
@@ -144,22 +145,6 @@ fn busy(e: impl std::fmt::Display) -> PyErr {
     ))
 }
 
-fn pool_of(threads: Option<usize>, default: usize) -> PyResult<(rayon::ThreadPool, usize)> {
-    let cpus = std::thread::available_parallelism().map_or(1, |n| n.get());
-    let n = threads.unwrap_or(default.max(1));
-    let max = 4 * cpus;
-    if n == 0 || n > max {
-        return Err(PyValueError::new_err(format!(
-            "threads = {n}: must lie in [1, {max}] (4 × the {cpus} logical CPUs of this machine)"
-        )));
-    }
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(n)
-        .build()
-        .map_err(other)?;
-    Ok((pool, n))
-}
-
 impl Simulation {
     fn assemble(
         sim: rheodem::Simulation,
@@ -241,8 +226,7 @@ impl Simulation {
     #[new]
     #[pyo3(signature = (scenario, threads = None))]
     fn new(py: Python<'_>, scenario: &Scenario, threads: Option<usize>) -> PyResult<Simulation> {
-        let cpus = std::thread::available_parallelism().map_or(1, |n| n.get());
-        let (pool, threads) = pool_of(threads, cpus)?;
+        let (pool, threads) = pool(threads, None)?;
         let (inner, base) = (&scenario.inner, &scenario.base_dir);
         let built = py
             .detach(|| pool.install(|| rheodem::scenario::build(inner, base)))
@@ -263,7 +247,7 @@ impl Simulation {
     #[pyo3(signature = (path, threads = None))]
     fn load(path: PathBuf, threads: Option<usize>) -> PyResult<Simulation> {
         let saved: Saved = read_checkpoint(&path).map_err(run_error)?;
-        let (pool, threads) = pool_of(threads, saved.threads)?;
+        let (pool, threads) = pool(threads, Some(saved.threads))?;
         Ok(Simulation::assemble(
             saved.simulation,
             threads,
@@ -288,7 +272,7 @@ impl Simulation {
             simulation,
             ..
         } = state;
-        let (pool, threads) = pool_of(threads, ran_with)?;
+        let (pool, threads) = pool(threads, Some(ran_with))?;
         Ok(Simulation::assemble(
             simulation,
             threads,
@@ -311,8 +295,7 @@ impl Simulation {
         let law = rheodem::contact::LawKind::from_name(cohesion).map_err(|e| {
             scenario_error(rheodem::scenario::invalid("cohesion", cohesion, e.reason))
         })?;
-        let cpus = std::thread::available_parallelism().map_or(1, |n| n.get());
-        let (pool, threads) = pool_of(threads, cpus)?;
+        let (pool, threads) = pool(threads, None)?;
         let sim = py.detach(|| {
             pool.install(|| {
                 rheodem::bench::standard_problem(1.0, law, rheodem::bench::DEFAULT_SKIN)
