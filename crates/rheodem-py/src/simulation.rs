@@ -84,7 +84,6 @@ struct Action {
 #[derive(Serialize)]
 struct SavedRef<'a> {
     threads: usize,
-    end_step: u64,
     resolved: &'a Option<Resolved>,
     simulation: &'a rheodem::Simulation,
 }
@@ -93,7 +92,6 @@ struct SavedRef<'a> {
 #[derive(Deserialize)]
 struct Saved {
     threads: usize,
-    end_step: u64,
     resolved: Option<Resolved>,
     simulation: rheodem::Simulation,
 }
@@ -110,8 +108,8 @@ pub struct Simulation {
     sim: rheodem::Simulation,
     threads: usize,
     pool: rayon::ThreadPool,
-    /// The scenario's last step (its `run.duration`), 0 when unknown.
-    end_step: u64,
+    /// The scenario's derived values (its last step among them), `None` for a state built
+    /// without a scenario.
     resolved: Option<Resolved>,
     lent: Lent,
     actions: Vec<Action>,
@@ -150,14 +148,12 @@ impl Simulation {
         sim: rheodem::Simulation,
         threads: usize,
         pool: rayon::ThreadPool,
-        end_step: u64,
         resolved: Option<Resolved>,
     ) -> Simulation {
         Simulation {
             sim,
             threads,
             pool,
-            end_step,
             resolved,
             lent: Lent::default(),
             actions: Vec::new(),
@@ -231,12 +227,10 @@ impl Simulation {
         let built = py
             .detach(|| pool.install(|| rheodem::scenario::build(inner, base)))
             .map_err(scenario_error)?;
-        let end = built.resolved.steps;
         Ok(Simulation::assemble(
             built.simulation,
             threads,
             pool,
-            end,
             Some(built.resolved),
         ))
     }
@@ -252,7 +246,6 @@ impl Simulation {
             saved.simulation,
             threads,
             pool,
-            saved.end_step,
             saved.resolved,
         ))
     }
@@ -267,7 +260,6 @@ impl Simulation {
             .into_state();
         let ScenarioState {
             resolved,
-            plan,
             threads: ran_with,
             simulation,
             ..
@@ -277,7 +269,6 @@ impl Simulation {
             simulation,
             threads,
             pool,
-            plan.steps,
             Some(resolved),
         ))
     }
@@ -301,14 +292,13 @@ impl Simulation {
                 rheodem::bench::standard_problem(1.0, law, rheodem::bench::DEFAULT_SKIN)
             })
         });
-        Ok(Simulation::assemble(sim, threads, pool, 0, None))
+        Ok(Simulation::assemble(sim, threads, pool, None))
     }
 
     /// Writes the complete state to `path` (atomically); `Simulation.load` continues it.
     fn checkpoint(&self, path: PathBuf) -> PyResult<()> {
         let saved = SavedRef {
             threads: self.threads,
-            end_step: self.end_step,
             resolved: &self.resolved,
             simulation: &self.sim,
         };
@@ -336,7 +326,7 @@ impl Simulation {
                         "duration = {d}: must be zero or a positive number of seconds"
                     )));
                 }
-                (None, None) => me.end_step.max(now),
+                (None, None) => me.end_step().max(now),
                 (Some(_), Some(_)) => {
                     return Err(PyValueError::new_err("give steps or duration, not both"));
                 }
@@ -450,7 +440,7 @@ impl Simulation {
     /// The scenario's last step (its run duration in steps); 0 when unknown.
     #[getter]
     fn end_step(&self) -> u64 {
-        self.end_step
+        self.resolved.as_ref().map_or(0, |r| r.steps)
     }
 
     /// Time step (s).
