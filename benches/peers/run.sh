@@ -1,6 +1,13 @@
 #!/usr/bin/env bash
 # benches/peers/run.sh — LAMMPS vs rheodem on the standard throughput problem.
 #
+# PROBLEM selects the contact law of the problem (the same spheres, shear and steps):
+#   shear        Hooke + tangential history (default): LAMMPS `gran/hooke/history`
+#                (benches/peers/lammps-in.shear), rheodem `bench`;
+#   shear-hertz  Hertz–Mindlin with Tsuji's damping: LAMMPS `pair_style granular`
+#                `hertz/material … tangential mindlin … damping tsuji`
+#                (benches/peers/lammps-in.shear-hertz), rheodem `bench --normal hertz`.
+#
 # Runs, in one go and on the same machine:
 #   * LAMMPS (Debian package, `pair_style gran/hooke/history`) on the input
 #     benches/peers/lammps-in.shear, on 1 rank (plain `lmp`) and 2 MPI ranks
@@ -20,7 +27,8 @@
 # drifts in background load hit all configurations alike; the table shows the median.
 #
 # Environment (all optional):
-#   LAMMPS_INPUT   LAMMPS input                               (default: <script dir>/lammps-in.shear)
+#   PROBLEM        shear or shear-hertz (above)               (default: shear)
+#   LAMMPS_INPUT   LAMMPS input                               (default: <script dir>/lammps-in.$PROBLEM)
 #   PYTHON         Python 3 for lammps_data.py                (default: python3)
 #   REPEATS        repetitions per configuration              (default: 3)
 #   NWARM, NRUN    LAMMPS warm-up / timed steps               (default: 2000 / 3000)
@@ -50,7 +58,13 @@ set -euo pipefail
 SCRIPT_DIR=$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)
 REPO_ROOT=$(git -C "$SCRIPT_DIR" rev-parse --show-toplevel)
 PACKING="$REPO_ROOT/crates/rheodem/data/bench-packing.txt"   # also built into `rheodem bench`
-LAMMPS_INPUT=${LAMMPS_INPUT:-"$SCRIPT_DIR/lammps-in.shear"}
+PROBLEM=${PROBLEM:-shear}
+case $PROBLEM in
+    shear) RHEODEM_LAW=""; LAMMPS_STYLE="gran/hooke/history" ;;
+    shear-hertz) RHEODEM_LAW="--normal hertz"; LAMMPS_STYLE="granular hertz/material, mindlin, tsuji" ;;
+    *) printf '[peers] ERROR: PROBLEM must be shear or shear-hertz (got %s)\n' "$PROBLEM" >&2; exit 1 ;;
+esac
+LAMMPS_INPUT=${LAMMPS_INPUT:-"$SCRIPT_DIR/lammps-in.$PROBLEM"}
 PYTHON=${PYTHON:-python3}
 REPEATS=${REPEATS:-3}
 NWARM=${NWARM:-2000}
@@ -223,7 +237,7 @@ run_lammps() {
     awk -v a="$atoms" -v s="$steps" -v t="$x" 'BEGIN { printf "%.6g\n", a*s/t }'
 }
 
-rheodem_cmd() { echo "cargo run --release -p rheodem-cli -- bench --threads $1"; }
+rheodem_cmd() { echo "cargo run --release -p rheodem-cli -- bench --threads $1 $RHEODEM_LAW"; }
 
 # run_rheodem N REP
 run_rheodem() {
@@ -291,7 +305,7 @@ fi
 RHEODEM_REV=$(git -C "$REPO_ROOT" describe --always --dirty 2>/dev/null || echo unknown)
 
 echo
-echo "### Standard throughput problem: rheodem vs LAMMPS"
+echo "### Standard throughput problem ($PROBLEM): rheodem vs LAMMPS"
 echo
 echo "- date: $(date -u '+%Y-%m-%d %H:%M UTC')"
 echo "- machine: $(env -u OMP_NUM_THREADS -u OMP_THREAD_LIMIT nproc) logical CPUs (nproc), $CPU_MODEL"
@@ -315,9 +329,9 @@ for n in "${COUNTS[@]}"; do
     # shellcheck disable=SC2086
     rm_=$(median ${RES[rheodem:$n]:-})
     if [[ -n "$lm" ]]; then
-        echo "| LAMMPS gran/hooke/history | $n $( ((n == 1)) && echo rank || echo ranks) | $(mega "$lm") | — |"
+        echo "| LAMMPS $LAMMPS_STYLE | $n $( ((n == 1)) && echo rank || echo ranks) | $(mega "$lm") | — |"
     elif [[ "$SKIP_LAMMPS" != 1 ]]; then
-        echo "| LAMMPS gran/hooke/history | $n | not measured | — |"
+        echo "| LAMMPS $LAMMPS_STYLE | $n | not measured | — |"
     fi
     if [[ -n "$rm_" ]]; then
         echo "| rheodem | $n $( ((n == 1)) && echo thread || echo threads) | $(mega "$rm_") | $([[ -n "$lm" ]] && ratio "$rm_" "$lm" || echo —) |"

@@ -3,7 +3,7 @@
 use crate::{law_arg, pool};
 use anyhow::{Result, bail};
 use clap::Args;
-use rheodem::contact::LawKind;
+use rheodem::contact::{LawKind, NormalKind};
 
 /// Arguments of `rheodem bench`.
 #[derive(Args)]
@@ -29,6 +29,11 @@ pub struct BenchArgs {
               (f_a^max = 185 for the mean pair, rupture at 0.225 d; default: none, \
               reversible, liquid_bridge)"))]
     pub cohesion: Vec<LawKind>,
+    /// Normal law of the problem: linear (the standard problem), hertz (Hertz with
+    /// Mindlin's sliding spring) or luding (plastic, no adhesive branch); the laws'
+    /// parameters are in docs/model.md and BENCHMARKS.md.
+    #[arg(long, default_value = "linear", value_parser = NormalKind::from_name)]
+    pub normal: NormalKind,
 }
 
 /// Measures the standard problem for each law and thread count.
@@ -40,6 +45,7 @@ pub fn run(args: BenchArgs) -> Result<()> {
         skin,
         stress_control,
         cohesion,
+        normal,
     } = args;
     if !(skin.is_finite() && skin > 0.0) {
         bail!("--skin = {skin}: must be a positive number");
@@ -57,14 +63,18 @@ pub fn run(args: BenchArgs) -> Result<()> {
     };
     println!("standard problem: {}", rheodem::bench::DESCRIPTION);
     for cohesion in variants {
-        let name = match cohesion {
+        let law = match cohesion {
             LawKind::None => "frictional",
             law => law.name(),
+        };
+        let name = match normal {
+            NormalKind::Linear => law.to_string(),
+            other => format!("{other}, {law}"),
         };
         for &n in &counts {
             let (pool, n) = pool(Some(n))?;
             let r = pool.install(|| {
-                let mut sim = rheodem::bench::standard_problem(1.0, cohesion, skin);
+                let mut sim = rheodem::bench::standard_problem_with(normal, 1.0, cohesion, skin);
                 if stress_control {
                     rheodem::bench::add_stress_control(&mut sim, 185.0);
                 }

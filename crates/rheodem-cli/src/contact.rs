@@ -4,12 +4,13 @@ use crate::law_arg;
 use anyhow::{Context, Result, bail};
 use clap::{Args, Subcommand};
 use rheodem::contact::adhesion::LAWS;
+use rheodem::contact::adhesion::LiquidBridge;
 use rheodem::contact::curve::{drive, standard_cycle};
 use rheodem::contact::equivalent::equivalent_linear;
 use rheodem::contact::names::with_aliases;
 use rheodem::contact::parameters::Parameter;
 use rheodem::contact::{
-    ContactLaw, Damping, LawKind, LawSpec, LinearNormal, NORMAL_LAWS, SPRING_LAWS, Spring,
+    Adhesion, ContactLaw, Damping, LawKind, LawSpec, LinearNormal, NORMAL_LAWS, SPRING_LAWS, Spring,
 };
 use rheodem::io::atomic::write_atomic;
 use rheodem::plot::{Labels, Series, line_plot_svg};
@@ -23,8 +24,8 @@ pub enum ContactCommand {
     /// Drive two particles through approach, separation past the range and a second
     /// approach; write the force–overlap curve as CSV and SVG.
     Curve(CurveArgs),
-    /// The linear irreversible laws equivalent to a Willett liquid bridge (Roy et al. 2016,
-    /// Sect. 4; docs/model.md §2.7).
+    /// The linear irreversible laws equivalent to a liquid bridge, Willett's or
+    /// Rabinovich's (Roy et al. 2016, Sect. 4; docs/model.md §2.7).
     Equivalent(EquivalentArgs),
     /// Every registered contact law by sub-model (normal, springs, adhesion), with the names
     /// scenario files and options accept and the adhesive laws' parameters.
@@ -88,6 +89,9 @@ pub struct CurveArgs {
 #[derive(Args)]
 #[command(allow_negative_numbers = true)]
 pub struct EquivalentArgs {
+    /// The bridge's law: liquid-bridge (Willett's) or rabinovich.
+    #[arg(long, default_value = "liquid-bridge", value_parser = law_arg::law_kind)]
+    law: LawKind,
     /// Surface tension γ_s (N/m).
     #[arg(long, default_value_t = 0.02)]
     surface_tension: f64,
@@ -266,7 +270,10 @@ fn curve(a: CurveArgs) -> Result<()> {
     }
     let f_max = law.adhesion.max_force(a.radius_i, a.radius_j);
     let max_overlap = a.max_overlap.unwrap_or(if f_max > 0.0 {
-        3.0 * f_max / law.normal.max_stiffness()
+        3.0 * f_max
+            / law
+                .normal
+                .max_stiffness(a.radius_i * a.radius_j / (a.radius_i + a.radius_j))
     } else {
         0.01 * a.radius_i.min(a.radius_j)
     });
@@ -303,31 +310,57 @@ fn curve(a: CurveArgs) -> Result<()> {
     let csv_path = a.out.with_extension("csv");
     write_atomic(&csv_path, csv.as_bytes())
         .with_context(|| format!("writing {}", csv_path.display()))?;
+    // Rabinovich's bridge is drawn beside Willett's of the same γ_s, θ and V_b.
+    let willett: Vec<(f64, f64)> = match law.adhesion {
+        Adhesion::Rabinovich(b) => {
+            let mut beside = law;
+            beside.adhesion = Adhesion::LiquidBridge(LiquidBridge {
+                surface_tension: b.surface_tension,
+                contact_angle: b.contact_angle,
+                volume: b.volume,
+            });
+            drive(&beside, a.radius_i, a.radius_j, &path)
+                .iter()
+                .enumerate()
+                .filter(|(k, _)| *k > leg_len && *k <= 2 * leg_len)
+                .map(|(_, p)| (p.overlap * 1e3, p.normal_force * 1e3))
+                .collect()
+        }
+        _ => Vec::new(),
+    };
+    let mut series = vec![
+        Series {
+            dashed_as: None,
+            label: "first approach",
+            points: &legs[0],
+        },
+        Series {
+            dashed_as: None,
+            label: "separation",
+            points: &legs[1],
+        },
+        // Dashed: it retraces the first approach where the bridge holds, which would
+        // hide it under a solid line.
+        Series {
+            dashed_as: Some(2),
+            label: "second approach (dashed over the first)",
+            points: &legs[2],
+        },
+    ];
+    if !willett.is_empty() {
+        series.push(Series {
+            dashed_as: Some(1),
+            label: "separation, Willett's bridge of the same γ_s, θ, V_b",
+            points: &willett,
+        });
+    }
     let svg = line_plot_svg(
         &Labels {
             title: "normal force against overlap",
             x: "overlap δ (mm)",
             y: "normal force (mN)",
         },
-        &[
-            Series {
-                dashed_as: None,
-                label: "first approach",
-                points: &legs[0],
-            },
-            Series {
-                dashed_as: None,
-                label: "separation",
-                points: &legs[1],
-            },
-            // Dashed: it retraces the first approach where the bridge holds, which would
-            // hide it under a solid line.
-            Series {
-                dashed_as: Some(2),
-                label: "second approach (dashed over the first)",
-                points: &legs[2],
-            },
-        ],
+        &series,
     )
     .map_err(|e| anyhow::anyhow!("plotting failed: {e}"))?;
     let svg_path = a.out.with_extension("svg");
@@ -352,8 +385,15 @@ fn equivalent(a: EquivalentArgs) -> Result<()> {
     {
         bail!("--surface-tension must be ≥ 0 and --contact-angle-deg in [0, 90)");
     }
+    let title = match a.law {
+        LawKind::LiquidBridge => "Willett bridge",
+        LawKind::Rabinovich => "Rabinovich bridge",
+        other => bail!(
+            "--law {other}: the linear equivalents are of a liquid bridge (liquid-bridge or rabinovich)"
+        ),
+    };
     println!(
-        "Willett bridge, γ_s = {} N/m, θ = {}°, d = {} / {} m (r = harmonic-mean radius)",
+        "{title}, γ_s = {} N/m, θ = {}°, d = {} / {} m (r = harmonic-mean radius)",
         a.surface_tension, a.contact_angle_deg, a.diameter, d_j
     );
     println!(
@@ -364,13 +404,23 @@ fn equivalent(a: EquivalentArgs) -> Result<()> {
         if !(v >= 0.0 && v.is_finite()) {
             bail!("--volume-nl = {v}: volumes must be finite and ≥ 0");
         }
-        match equivalent_linear(
-            a.surface_tension,
-            a.contact_angle_deg.to_radians(),
-            v * 1e-12,
-            0.5 * a.diameter,
-            0.5 * d_j,
-        ) {
+        let bridge = if v == 0.0 && a.law == LawKind::Rabinovich {
+            None
+        } else {
+            let spec = LawSpec::new(
+                a.law,
+                [
+                    ("surface_tension", a.surface_tension),
+                    ("contact_angle_deg", a.contact_angle_deg),
+                    ("volume", v * 1e-12),
+                ],
+            );
+            let law = spec.build().map_err(|e| {
+                anyhow::anyhow!("--law {}: `{}` = {}: {}", a.law, e.key, e.value, e.reason)
+            })?;
+            equivalent_linear(&law, 0.5 * a.diameter, 0.5 * d_j)
+        };
+        match bridge {
             Some(e) => println!(
                 "{v:>8} {:>12.4e} {:>12.4e} {:>12.4e} {:>12.4} N/m {:>12.4} N/m",
                 e.max_force,

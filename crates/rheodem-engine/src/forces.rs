@@ -1047,6 +1047,7 @@ fn apart_batch<O: ContactObserver, const AVX: bool>(
     let separation = -((radius_i + radius_j) - dist);
     let (f_a, alive) = kernel.apart_lanes::<F4, false>(separation, radius_i, radius_j, bridge);
     let (rotation, keeps_state) = (kernel.resists_rotation(), kernel.keeps_state());
+    let sliding_state = kernel.sliding_keeps_state();
     for (l, c) in c.iter().enumerate().take(batch.len()) {
         let (i, j, local) = (c.i as usize, c.j as usize, c.local as usize);
         // The springs relax. Those of rotation stay zero under a law without them, so
@@ -1060,6 +1061,9 @@ fn apart_batch<O: ContactObserver, const AVX: bool>(
             }
             if keeps_state {
                 *at_mut(history.state, local) = 0.0;
+            }
+            if sliding_state {
+                *at_mut(history.sliding_state, local) = 0.0;
             }
             *at_mut(history.bridge, local) = alive[l];
             *at_mut(active, local) = f_a.0[l] != 0.0;
@@ -1178,6 +1182,7 @@ fn touch_batch<O: ContactObserver, const AVX: bool, N: NormalForce>(
     let mut springs = HistoryLanes::<F4>::default();
     let (rotation, bridges) = (kernel.resists_rotation(), kernel.needs_bridge());
     let keeps_state = normal.keeps_state();
+    let sliding_state = kernel.sliding_keeps_state();
     let c = lanes_of(within, batch);
     // Lane by lane into rows, then into lane groups.
     let (mut branch, mut velocity, mut omega_i, mut omega_j, mut tangential) = (
@@ -1218,6 +1223,9 @@ fn touch_batch<O: ContactObserver, const AVX: bool, N: NormalForce>(
         if keeps_state {
             springs.state.0[l] = history.state[local];
         }
+        if sliding_state {
+            springs.sliding_state.0[l] = history.sliding_state[local];
+        }
     }
     // SAFETY: with `AVX` the CPU has AVX (the caller's contract).
     let mut pair = unsafe {
@@ -1255,6 +1263,9 @@ fn touch_batch<O: ContactObserver, const AVX: bool, N: NormalForce>(
         }
         if keeps_state {
             history.state[local] = springs.state.0[l];
+        }
+        if sliding_state {
+            history.sliding_state[local] = springs.sliding_state.0[l];
         }
         // SAFETY: as above.
         unsafe {

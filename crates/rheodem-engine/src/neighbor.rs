@@ -1086,6 +1086,7 @@ mod tests {
                             torsion: random(1.0),
                             bridge: k % 2 == 0,
                             state: random(1.0).x,
+                            sliding_state: random(1.0).y,
                         };
                         list.active[k] = true;
                         list.history.view().set(k, &h);

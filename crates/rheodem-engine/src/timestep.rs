@@ -28,8 +28,9 @@ pub enum TimeStepError {
 }
 
 /// The shortest binary contact time `t_c` (s) over every species pair that can meet,
-/// evaluated for the lightest particles of each species (prescribed particles and planar
-/// walls count as infinitely heavy).
+/// evaluated for the lightest particles of each species with the smallest radius of the
+/// species (prescribed particles and planar walls count as infinitely heavy, and a
+/// sphere meeting one counts with its own radius).
 pub fn shortest_contact_time(
     particles: &Particles,
     laws: &ContactTable,
@@ -37,11 +38,13 @@ pub fn shortest_contact_time(
 ) -> Result<f64, TimeStepError> {
     let ns = laws.species();
     let mut lightest_free = vec![f64::INFINITY; ns];
+    let mut smallest_free = vec![f64::INFINITY; ns];
     let mut has_prescribed = vec![false; ns];
     for i in 0..particles.len() {
         let s = particles.species[i] as usize;
         if particles.motion[i].is_free() {
             lightest_free[s] = lightest_free[s].min(particles.mass[i]);
+            smallest_free[s] = smallest_free[s].min(particles.radius[i]);
         } else {
             has_prescribed[s] = true;
         }
@@ -55,20 +58,24 @@ pub fn shortest_contact_time(
             continue;
         }
         for b in 0..ns {
-            let mut masses = Vec::with_capacity(2);
+            let mut pairs = Vec::with_capacity(2);
             if b >= a && lightest_free[b].is_finite() {
-                masses.push(1.0 / (1.0 / lightest_free[a] + 1.0 / lightest_free[b]));
+                let (r_a, r_b) = (smallest_free[a], smallest_free[b]);
+                pairs.push((
+                    1.0 / (1.0 / lightest_free[a] + 1.0 / lightest_free[b]),
+                    r_a * r_b / (r_a + r_b),
+                ));
             }
             if has_prescribed[b] {
-                masses.push(lightest_free[a]);
+                pairs.push((lightest_free[a], smallest_free[a]));
             }
-            for m in masses {
+            for (m, r) in pairs {
                 let overdamped = TimeStepError::Overdamped {
                     a: a as u16,
                     b: b as u16,
                 };
                 let law = &laws.get(a as u16, b as u16).normal;
-                t_min = t_min.min(law.contact_time(m).ok_or(overdamped)?);
+                t_min = t_min.min(law.contact_time(m, r).ok_or(overdamped)?);
             }
         }
     }

@@ -5,8 +5,8 @@
 //! sheared at `γ̇ = 1` through Lees-Edwards boundaries (shear `x`, gradient `y`).
 
 use crate::Simulation;
-pub use crate::contact::standard::{BENCH_STRENGTH, bench_adhesion, bench_law};
-use crate::contact::{ContactLaw, ContactTable, LawKind};
+pub use crate::contact::standard::{BENCH_STRENGTH, bench_adhesion, bench_law, bench_law_with};
+use crate::contact::{ContactLaw, ContactTable, LawKind, NormalKind};
 use crate::domain::Domain;
 use crate::io::packing::parse_packing;
 use crate::particles::{Motion, Particles, Sphere};
@@ -29,6 +29,16 @@ pub const DEFAULT_SKIN: f64 = 0.2;
 /// Builds the standard problem sheared at `shear_rate` (model units) with the given
 /// adhesive law at the bench strength ([`BENCH_STRENGTH`]) and Verlet skin (model units).
 pub fn standard_problem(shear_rate: f64, cohesion: LawKind, skin: f64) -> Simulation {
+    standard_problem_with(NormalKind::Linear, shear_rate, cohesion, skin)
+}
+
+/// [`standard_problem`] with the normal law `normal` of [`bench_law_with`].
+pub fn standard_problem_with(
+    normal: NormalKind,
+    shear_rate: f64,
+    cohesion: LawKind,
+    skin: f64,
+) -> Simulation {
     let packing = parse_packing(PACKING).expect("the shipped packing is valid");
     let edge = packing
         .box_edge
@@ -56,7 +66,7 @@ pub fn standard_problem(shear_rate: f64, cohesion: LawKind, skin: f64) -> Simula
             1,
             ContactLaw {
                 adhesion: bench_adhesion(cohesion),
-                ..bench_law()
+                ..bench_law_with(normal)
             },
         ),
         Vec::new(),

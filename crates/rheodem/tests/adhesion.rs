@@ -570,7 +570,7 @@ const MISPRINTS: [(u32, f64, f64, f64); 3] = [
 ];
 
 fn equivalents(v_nl: f64) -> Option<(f64, f64)> {
-    equivalent_linear(GAMMA_S, theta(), v_nl * NL, A_I, A_I)
+    equivalent_linear(&bridge_law(v_nl * NL), A_I, A_I)
         .map(|e| (e.equal_range_stiffness, e.equal_energy_stiffness))
 }
 
@@ -626,7 +626,7 @@ fn equivalent_stiffnesses_reproduce_seed_002_eqs_29_and_31() {
 
     // Against the independent closed forms, and the relations between the fields.
     for &v in &VOLUMES_NL[1..] {
-        let e = equivalent_linear(GAMMA_S, theta(), v * NL, A_I, A_I).expect("a bridge");
+        let e = equivalent_linear(&bridge_law(v * NL), A_I, A_I).expect("a bridge");
         let w = Willett::new(GAMMA_S, theta(), v * NL, A_I, A_I);
         let rel = |a: f64, b: f64| (a / b - 1.0).abs();
         assert!(rel(e.max_force, w.f_max) < 1e-14 && rel(e.rupture_distance, w.s_c) < 1e-14);
@@ -647,7 +647,18 @@ fn equivalent_stiffnesses_reproduce_seed_002_eqs_29_and_31() {
         // Equal energy means a shorter range: the Willett force is convex in S.
         assert!(e.equal_energy_range < e.rupture_distance);
     }
-    assert!(equivalent_linear(0.0, theta(), 75.0 * NL, A_I, A_I).is_none());
+    assert!(
+        equivalent_linear(
+            &Adhesion::LiquidBridge(LiquidBridge {
+                surface_tension: 0.0,
+                contact_angle: theta(),
+                volume: 75.0 * NL,
+            }),
+            A_I,
+            A_I
+        )
+        .is_none()
+    );
 
     // The mapping: both stiffnesses fall strictly with the volume, so an ascending list
     // runs through the volumes in descending order. Eq. 29 leaves one volume out; among
@@ -735,7 +746,7 @@ fn wet_pair(ratio: f64, steps: usize) -> PairRun {
     let law = with_adhesion(bridge_law(V_75NL));
     let (m_i, m_j) = (mass(A_I), mass(A_J));
     let m_ij = m_i * m_j / (m_i + m_j);
-    let t_c = law.normal.contact_time(m_ij).expect("undamped");
+    let t_c = law.normal.contact_time(m_ij, 5.0e-4).expect("undamped");
     let dt = t_c / 100.0;
     let energy = w.energy();
     let k0 = ratio * energy;

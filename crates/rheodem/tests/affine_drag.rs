@@ -76,7 +76,11 @@ fn particles_at_rest_relative_to_the_flow_stay_so() {
         })
         .collect();
     let law = frictional_law(0.8, 0.5);
-    let dt = law.normal.contact_time(0.5 * mass(a)).expect("underdamped") / 50.0;
+    let dt = law
+        .normal
+        .contact_time(0.5 * mass(a), 0.5 * a)
+        .expect("underdamped")
+        / 50.0;
     let mut sim = simulation(&spheres, law, domain, vec![], DVec3::ZERO, dt);
     // Long enough for two wraps of the shift (at strains L_x/2L_y and 3L_x/2L_y).
     let steps = (1.6 * SIZE.x / (SIZE.y * RATE * dt)).ceil() as u64;
@@ -149,7 +153,11 @@ fn a_crossing_keeps_the_velocity_and_the_path() {
         };
         let c = DVec3::new(0.01, if upwards { 0.03 } else { -0.03 }, -0.004);
         let law = normal_law(0.8);
-        let dt = law.normal.contact_time(0.5 * mass(a)).expect("underdamped") / 50.0;
+        let dt = law
+            .normal
+            .contact_time(0.5 * mass(a), 0.5 * a)
+            .expect("underdamped")
+            / 50.0;
         let mut sim = simulation(&[sphere(r0, c, a)], law, domain, vec![], DVec3::ZERO, dt);
         let sign = if upwards { 1.0 } else { -1.0 };
         let (mut wrapped_at, mut worst) = (None, 0.0f64);

@@ -38,7 +38,7 @@ fn head_on(e: f64, a1: f64, a2: f64, wall: bool, steps_per_contact: f64) -> (Out
     let m1 = RHO * 4.0 / 3.0 * PI * a1.powi(3);
     let m2 = RHO * 4.0 / 3.0 * PI * a2.powi(3);
     let m_ij = if wall { m1 } else { m1 * m2 / (m1 + m2) };
-    let t_c = law.normal.contact_time(m_ij).expect("underdamped");
+    let t_c = law.normal.contact_time(m_ij, 5.0e-4).expect("underdamped");
     let dt = t_c / steps_per_contact;
     let mut sim = simulation(&[s1, s2], law, open_box(0.1), vec![], DVec3::ZERO, dt);
 
@@ -136,7 +136,7 @@ fn history_survives_rebuilds_and_resorting() {
             max_force: 1e-4,
             stiffness: 100.0,
         });
-        let t_c = law.normal.contact_time(1e-6).expect("underdamped");
+        let t_c = law.normal.contact_time(1e-6, 5.0e-4).expect("underdamped");
         simulation(
             &[s2, s1],
             law,

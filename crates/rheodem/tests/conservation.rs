@@ -46,7 +46,7 @@ fn shortest_pair_contact_time(spheres: &[Sphere], law: &ContactLaw) -> f64 {
         .map(|s| s.radius)
         .fold(f64::INFINITY, f64::min);
     law.normal
-        .contact_time(0.5 * mass(a_min))
+        .contact_time(0.5 * mass(a_min), 0.5 * a_min)
         .expect("underdamped")
 }
 
@@ -84,33 +84,9 @@ fn energy_run(
     let (spheres, domain) = fcc_packing(cells, phi, w, v_rms, 0.0, seed);
     let dt = shortest_pair_contact_time(&spheres, &law) / per_contact;
     let mut sim = simulation(&spheres, law, domain, vec![], DVec3::ZERO, dt);
-    // A single-threaded pool: the run (and so the realisation of the integration error) is
-    // the same on every machine.
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(1)
-        .build()
-        .expect("thread pool");
     let clock = Instant::now();
-    let (t, energy, z) = pool.install(|| {
-        let (mut t, mut energy, mut z) = (Vec::new(), Vec::new(), 0.0);
-        for k in 1..=steps {
-            let measure = k % every == 0;
-            sim.step(measure).expect("step");
-            if measure {
-                let obs = sim.observables();
-                t.push(sim.time);
-                energy.push(obs.total_energy());
-                z += obs.coordination;
-            }
-        }
-        (t, energy, z)
-    });
+    let (drift, rms, z) = energy_drift(&mut sim, steps, every);
     let elapsed = clock.elapsed();
-    let n = energy.len() as f64;
-    let mean = energy.iter().sum::<f64>() / n;
-    let (_, slope) = linear_fit(&t, &energy);
-    let drift = slope * (t[t.len() - 1] - t[0]) / mean;
-    let rms = (energy.iter().map(|e| (e - mean).powi(2)).sum::<f64>() / n).sqrt() / mean;
     eprintln!(
         "energy [{label}]: {} particles, φ = {phi}, w = {w}, {steps} steps at t_c/{per_contact} \
          ({:.0} t_c) in {:.1} s, {} rebuilds, mean Z = {:.2}: relative drift = {drift:.3e}, \
@@ -119,9 +95,9 @@ fn energy_run(
         steps as f64 / per_contact,
         elapsed.as_secs_f64(),
         sim.neighbors.builds,
-        z / n,
+        z,
     );
-    (drift, rms, z / n)
+    (drift, rms, z)
 }
 
 /// Total energy of an undamped, frictionless, compressed periodic packing: no drift over 10⁵

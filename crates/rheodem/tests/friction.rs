@@ -102,7 +102,7 @@ fn oblique(
     } else {
         mass(a0) * mass(a1) / (mass(a0) + mass(a1))
     };
-    let t_c = law.normal.contact_time(m_ij).expect("underdamped");
+    let t_c = law.normal.contact_time(m_ij, 5.0e-4).expect("underdamped");
     let dt = t_c / steps_per_contact;
     let mut sim = simulation(&[s0, s1], law, open_box(0.01), vec![], DVec3::ZERO, dt);
 
@@ -314,7 +314,7 @@ fn sliding_sphere_ends_rolling_at_five_sevenths() {
         let a = A_REF;
         let m = mass(a);
         let law = frictional_law(e, mu);
-        let t_c = law.normal.contact_time(m).expect("underdamped");
+        let t_c = law.normal.contact_time(m, 5.0e-4).expect("underdamped");
         let dt = t_c / 50.0;
         let overlap = m * g / KN;
         let s = sphere(DVec3::new(0.0, 0.0, a - overlap), v0 * dir, a);

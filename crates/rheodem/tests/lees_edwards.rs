@@ -85,7 +85,9 @@ fn full_law(e: f64, mu: f64) -> ContactLaw {
 }
 
 fn contact_time(law: &ContactLaw, a: f64) -> f64 {
-    law.normal.contact_time(0.5 * mass(a)).expect("underdamped")
+    law.normal
+        .contact_time(0.5 * mass(a), 0.5 * a)
+        .expect("underdamped")
 }
 
 // ---------------------------------------------------------------------------------------

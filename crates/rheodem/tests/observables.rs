@@ -21,7 +21,7 @@ fn coordination_with_and_without_rattlers() {
         sphere(DVec3::new(0.0, 5.0 * a, 0.0), DVec3::ZERO, a),
     ];
     let law = normal_law(0.8);
-    let t_c = law.normal.contact_time(1e-6).expect("underdamped");
+    let t_c = law.normal.contact_time(1e-6, 5.0e-4).expect("underdamped");
     let mut sim = simulation(
         &spheres,
         law,

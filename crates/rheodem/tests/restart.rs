@@ -117,6 +117,56 @@ fn a_plastic_contact_keeps_its_largest_overlap_through_a_checkpoint() {
 }
 
 #[test]
+fn a_mindlin_contact_keeps_its_contact_radius_through_a_checkpoint() {
+    // Mindlin's sliding spring keeps each contact's radius at the last step as its state
+    // (beside Hertz's normal law): the checkpoint holds it, and the resumed run continues
+    // in the same bits.
+    let scenario = SCENARIO
+        .replace(
+            "normal = { stiffness = 100.0, restitution = 0.8 }",
+            "normal = { law = \"hertz\", youngs_modulus = 2.0e7, poisson_ratio = 0.3, \
+             restitution = 0.8 }",
+        )
+        .replace(
+            "friction = { stiffness_ratio = 0.2857, damping_ratio = 0.2857, mu = 0.5 }",
+            "friction = { law = \"mindlin\", mu = 0.5, damping_ratio = 0.5 }",
+        )
+        .replace(
+            "rolling = { stiffness_ratio = 0.2857, damping_ratio = 0.2857, mu = 0.1 }\n",
+            "",
+        )
+        .replace(
+            "torsion = { stiffness_ratio = 0.2857, damping_ratio = 0.2857, mu = 0.1 }\n",
+            "",
+        );
+    assert!(!scenario.contains("stiffness_ratio"));
+    stop_resume_and_compare(&scenario, "mindlin", |resumed| {
+        let slices = resumed.simulation.neighbors.slices();
+        let kept = slices
+            .history
+            .iter()
+            .filter(|h| h.sliding_state > 0.0)
+            .count();
+        assert!(kept > 0, "the checkpoint holds the contacts' radii");
+    });
+}
+
+#[test]
+fn a_rabinovich_bridge_survives_a_checkpoint() {
+    // Rabinovich's bridges form at contact and outlive it until they rupture: the
+    // checkpoint holds the open ones, and the resumed run continues in the same bits.
+    let scenario = SCENARIO.replace(
+        "adhesion = { law = \"liquid_bridge\",",
+        "adhesion = { law = \"rabinovich\",",
+    );
+    assert_ne!(scenario, SCENARIO);
+    stop_resume_and_compare(&scenario, "rabinovich", |resumed| {
+        let open = resumed.rows.last().map_or(0.0, |o| o.bridges_per_particle);
+        assert!(open > 0.0, "the checkpoint holds open bridges");
+    });
+}
+
+#[test]
 fn resumed_run_is_bit_identical() {
     let whole_dir = temp_dir("whole");
     let mut whole = start(&whole_dir);

@@ -184,7 +184,7 @@ fn controls_round_trip_through_si_values() {
                 // k_c^a = k_n: range f_max / k_n.
                 assert!(close(law.adhesion.range(), f / k, 1e-14));
             }
-            LawKind::LiquidBridge | LawKind::LinearIrreversible => {
+            LawKind::LiquidBridge | LawKind::LinearIrreversible | LawKind::Rabinovich => {
                 assert!(close(f_pair, f, 1e-14), "{f_pair} vs {f}");
                 assert!(
                     close(law.adhesion.range(), range * d, 1e-14),
@@ -575,4 +575,52 @@ fn reduced_steady_state_is_sensible() {
     // The result of run_point matches a re-analysis of the reloaded time series.
     let again = steady_state(&r.run.rows, &r.spec, &r.result.derived).expect("rows");
     assert_eq!(again.volume_fraction, ss.volume_fraction);
+}
+
+/// With `normal_law = "luding"` the point's contacts load along `k_n` and unload along
+/// `k_p = plastic_ratio · k_n`, and its adhesive branch is sized so that a contact of the
+/// mean pair loaded to the plastic limit pulls off with `f_a^max = Bo p d²` (driven here
+/// through the law built from the scenario: the most negative force of the cycle, to the
+/// step of the drive, 10⁻³). `cohesion` must stay `none`, and a `Bo` beyond what the law can
+/// pull is refused with the key.
+#[test]
+fn a_luding_point_pulls_off_with_its_bond_number() {
+    use rheodem::contact::curve::drive;
+    let s =
+        spec("mu_p = 0.3\ninertial = 0.02\nsoftness = 0.01\nbond = 1.0\nnormal_law = \"luding\"");
+    let dv = s.derive().expect("valid");
+    let sc = s.scenario().expect("scenario");
+    assert!(sc.contacts[0].adhesion.is_none());
+    let law = *contact_table(&sc).expect("table").get(0, 0);
+    let (a, k_n) = (0.5 * s.diameter, s.stiffness);
+    let limit = 5.0 / 4.0 * 0.05 * a; // k_p/(k_p − k_1) φ_f r, r = d/2 = a
+    let n = 20_000;
+    let path: Vec<f64> = (0..=n)
+        .map(|k| limit * k as f64 / n as f64)
+        .chain((1..=n).map(|k| limit * (1.0 - 1.001 * k as f64 / n as f64)))
+        .collect();
+    let curve = drive(&law, a, a, &path);
+    let pull_off = curve
+        .iter()
+        .map(|p| p.normal_force)
+        .fold(f64::INFINITY, f64::min);
+    assert!(
+        (-pull_off / dv.max_force - 1.0).abs() < 1e-3,
+        "pull-off {pull_off} vs f_a^max {}",
+        dv.max_force
+    );
+    // Loading follows k_n.
+    assert!((curve[n / 2].normal_force / (k_n * path[n / 2]) - 1.0).abs() < 1e-12);
+    let e = spec(
+        "mu_p = 0.3\ninertial = 0.02\nsoftness = 0.01\nbond = 1.0\nnormal_law = \"luding\"\n\
+         cohesion = \"reversible\"",
+    )
+    .derive()
+    .expect_err("luding carries the cohesion");
+    assert!(e.to_string().contains("cohesion"), "{e}");
+    let e =
+        spec("mu_p = 0.3\ninertial = 0.02\nsoftness = 0.01\nbond = 20.0\nnormal_law = \"luding\"")
+            .derive()
+            .expect_err("beyond the law's pull-off");
+    assert!(e.to_string().contains("`bond` = 20"), "{e}");
 }

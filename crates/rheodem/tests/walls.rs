@@ -109,7 +109,10 @@ fn settled_column_is_carried_by_the_floor() {
     }
     let law = frictional_law(0.3, 0.5);
     let m_min = mass(0.9 * A_REF);
-    let t_c = law.normal.contact_time(0.5 * m_min).expect("underdamped");
+    let t_c = law
+        .normal
+        .contact_time(0.5 * m_min, 0.45 * A_REF)
+        .expect("underdamped");
     let g = 9.81;
     let mut sim = simulation(
         &spheres,

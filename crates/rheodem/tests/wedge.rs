@@ -114,7 +114,10 @@ fn bonded_law() -> ContactLaw {
 
 /// Time step: 1/50 of the contact time of two test spheres.
 fn test_dt(law: &ContactLaw) -> f64 {
-    law.normal.contact_time(0.5 * mass(A)).expect("underdamped") / 50.0
+    law.normal
+        .contact_time(0.5 * mass(A), 0.5 * A)
+        .expect("underdamped")
+        / 50.0
 }
 
 /// Position, velocity, spin, force and torque of particle `id`.

@@ -1,9 +1,9 @@
-//! The linear irreversible law equivalent to a Willett liquid bridge (Roy et al. 2016, Sect. 4;
-//! docs/model.md §2.7):
-//! same maximum force and (a) the same interaction distance, or (b) the same adhesive
-//! energy per contact `E = ∫₀^{S_c} |f_a| dS`.
+//! The linear irreversible law equivalent to a liquid bridge (Willett's or Rabinovich's;
+//! Roy et al. 2016, Sect. 4; docs/model.md §2.7): same maximum force and (a) the same
+//! interaction distance, or (b) the same adhesive energy per contact
+//! `E = ∫₀^{S_c} |f_a| dS`.
 
-use super::adhesion::{Adhesion, LiquidBridge};
+use super::adhesion::Adhesion;
 use serde::Serialize;
 
 /// The bridge's characteristics and the two equivalent linear stiffnesses.
@@ -26,21 +26,10 @@ pub struct Equivalent {
 /// Number of Simpson intervals over `[0, S_c]` (the integrand is smooth: error ~1e-14).
 const INTERVALS: usize = 2000;
 
-/// Equivalent linear laws of a Willett bridge (`surface_tension` N/m, `contact_angle`
-/// rad, `volume` m³) between spheres of radii `a_i`, `a_j` (m). `None` when the parameters
-/// give no attraction (zero volume or tension, `θ ≥ 90°`).
-pub fn equivalent_linear(
-    surface_tension: f64,
-    contact_angle: f64,
-    volume: f64,
-    a_i: f64,
-    a_j: f64,
-) -> Option<Equivalent> {
-    let bridge = Adhesion::LiquidBridge(LiquidBridge {
-        surface_tension,
-        contact_angle,
-        volume,
-    });
+/// Equivalent linear laws of an adhesive law with a range (a liquid bridge) between
+/// spheres of radii `a_i`, `a_j` (m). `None` when the law gives no attraction beyond
+/// contact (zero volume or tension).
+pub fn equivalent_linear(bridge: &Adhesion, a_i: f64, a_j: f64) -> Option<Equivalent> {
     let f_max = bridge.max_force(a_i, a_j);
     let s_c = bridge.range();
     if !(f_max > 0.0 && s_c > 0.0 && f_max.is_finite() && s_c.is_finite()) {

@@ -118,6 +118,7 @@ impl PairKernel {
             rolling: V3::from_glam(h.rolling),
             torsion: V3::from_glam(h.torsion),
             state: h.state,
+            sliding_state: h.sliding_state,
         };
         let f = if k.radius_j.is_finite() {
             self.touching_lanes::<f64, false>(&pair, &mut springs, dt)
@@ -128,6 +129,7 @@ impl PairKernel {
         h.rolling = springs.rolling.to_glam();
         h.torsion = springs.torsion.to_glam();
         h.state = springs.state;
+        h.sliding_state = springs.sliding_state;
         if self.needs_bridge() {
             h.bridge = true;
         }
@@ -198,6 +200,13 @@ impl PairKernel {
         self.normal.keeps_state()
     }
 
+    /// Whether the sliding spring's law keeps a per-contact state
+    /// ([`super::spring::SpringModel::KEEPS_STATE`]).
+    #[inline(always)]
+    pub fn sliding_keeps_state(&self) -> bool {
+        self.sliding && self.tangential.keeps_state()
+    }
+
     /// Whether the law has rolling or torsion resistance (springs beyond the sliding one).
     #[inline(always)]
     pub fn resists_rotation(&self) -> bool {
@@ -265,9 +274,15 @@ impl PairKernel {
             };
             let v_contact = k.velocity - spin.cross(n);
             let v_t = v_contact - n.scale(n.dot(v_contact));
-            let (f_t, slip) =
-                self.tangential
-                    .in_plane_lanes(&mut springs.tangential, n, v_t, k, limit_ref, dt);
+            let (f_t, slip) = self.tangential.in_plane_lanes(
+                &mut springs.tangential,
+                n,
+                v_t,
+                k,
+                limit_ref,
+                dt,
+                &mut springs.sliding_state,
+            );
             let arm = n.cross(f_t);
             out.force = out.force + f_t;
             out.torque_i = arm.scale(-lever_i);
@@ -286,9 +301,17 @@ impl PairKernel {
             let w_rel = k.omega_i - k.omega_j;
             if self.rolling_on {
                 let v_r = w_rel.cross(n).scale(-a_eff);
-                let (f_r, _) =
-                    self.rolling
-                        .in_plane_lanes(&mut springs.rolling, n, v_r, k, limit_ref, dt);
+                // A rolling spring keeps no state (scenarios refuse laws that would).
+                let mut no_state = R::splat(0.0);
+                let (f_r, _) = self.rolling.in_plane_lanes(
+                    &mut springs.rolling,
+                    n,
+                    v_r,
+                    k,
+                    limit_ref,
+                    dt,
+                    &mut no_state,
+                );
                 let t = n.cross(f_r).scale(-a_eff);
                 out.torque_i = out.torque_i + t;
                 out.torque_j = out.torque_j - t;
@@ -329,7 +352,7 @@ pub struct Touch<R> {
     pub reduced_mass: R,
 }
 
-/// A touching contact's history in lanes: the three springs (m) and the normal law's state
+/// A touching contact's history in lanes: the three springs (m) and the laws' states
 /// (see [`ContactHistory`]).
 #[derive(Clone, Copy, Debug, Default)]
 pub struct HistoryLanes<R> {
@@ -341,6 +364,8 @@ pub struct HistoryLanes<R> {
     pub torsion: V3<R>,
     /// The normal law's per-contact state (zero under a law that keeps none).
     pub state: R,
+    /// The sliding spring law's per-contact state (zero under a law that keeps none).
+    pub sliding_state: R,
 }
 
 /// What [`PairKernel::touching_lanes`] returns: forces and torques on `i` (N, N m), the

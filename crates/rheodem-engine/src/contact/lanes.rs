@@ -26,6 +26,8 @@ pub trait Real:
     fn sqrt(self) -> Self;
     /// Absolute value, lane by lane.
     fn abs(self) -> Self;
+    /// Sine and cosine, lane by lane (each lane with `f64::sin_cos`).
+    fn sin_cos(self) -> (Self, Self);
     /// `self < other`, lane by lane.
     fn lt(self, other: Self) -> Self::Mask;
     /// `self > other`, lane by lane.
@@ -55,6 +57,10 @@ impl Real for f64 {
     #[inline(always)]
     fn abs(self) -> f64 {
         f64::abs(self)
+    }
+    #[inline(always)]
+    fn sin_cos(self) -> (f64, f64) {
+        f64::sin_cos(self)
     }
     #[inline(always)]
     fn lt(self, other: f64) -> bool {
@@ -134,6 +140,11 @@ impl Real for F4 {
     #[inline(always)]
     fn abs(self) -> F4 {
         lanes(|l| self.0[l].abs())
+    }
+    #[inline(always)]
+    fn sin_cos(self) -> (F4, F4) {
+        let both: [(f64, f64); 4] = std::array::from_fn(|l| self.0[l].sin_cos());
+        (lanes(|l| both[l].0), lanes(|l| both[l].1))
     }
     #[inline(always)]
     fn lt(self, other: F4) -> [bool; 4] {

@@ -74,6 +74,12 @@ pub struct ContactHistory {
     /// law that keeps none. Absent from records written before laws could keep state.
     #[serde(default)]
     pub state: f64,
+    /// The per-contact state the sliding spring's law declares it keeps
+    /// ([`spring::SpringModel::KEEPS_STATE`], e.g. Mindlin's contact radius at the last step
+    /// in m); zero under a law that keeps none. Absent from records written before springs
+    /// could keep state.
+    #[serde(default)]
+    pub sliding_state: f64,
 }
 
 impl ContactHistory {
@@ -87,6 +93,7 @@ impl ContactHistory {
             torsion: -self.torsion,
             bridge: self.bridge,
             state: self.state,
+            sliding_state: self.sliding_state,
         }
     }
 
@@ -109,6 +116,7 @@ impl ContactHistory {
             torsion: f(self.torsion),
             bridge: self.bridge,
             state: self.state,
+            sliding_state: self.sliding_state,
         }
     }
 }

@@ -1,9 +1,9 @@
 //! The contact history of a pair list, one slot per pair, in structure-of-arrays form.
 //!
 //! A touching pair under sliding friction alone reads and writes its tangential spring
-//! only; with the springs, the bridge flag and the normal law's state in separate arrays
-//! (the force loop touches the state only under a law that keeps one), the force loop streams
-//! 24 bytes per pair instead of a whole [`ContactHistory`] record (80 bytes), and the
+//! only; with the springs, the bridge flag and the laws' states in separate arrays
+//! (the force loop touches a state only under a law that keeps one), the force loop streams
+//! 24 bytes per pair instead of a whole [`ContactHistory`] record (96 bytes), and the
 //! array it walks each step fits in a core's L2 cache on the standard problem. Stored
 //! (checkpoints) as a sequence of [`ContactHistory`] records, as before the split.
 
@@ -19,6 +19,7 @@ pub struct HistorySlots {
     torsion: Vec<DVec3>,
     bridge: Vec<bool>,
     state: Vec<f64>,
+    sliding_state: Vec<f64>,
 }
 
 impl HistorySlots {
@@ -39,6 +40,7 @@ impl HistorySlots {
         self.torsion.resize(n, DVec3::ZERO);
         self.bridge.resize(n, false);
         self.state.resize(n, 0.0);
+        self.sliding_state.resize(n, 0.0);
     }
 
     /// The history of slot `k`.
@@ -49,6 +51,7 @@ impl HistorySlots {
             &self.torsion,
             &self.bridge,
             &self.state,
+            &self.sliding_state,
             k,
         )
     }
@@ -66,11 +69,12 @@ impl HistorySlots {
             torsion: &mut self.torsion,
             bridge: &mut self.bridge,
             state: &mut self.state,
+            sliding_state: &mut self.sliding_state,
         }
     }
 }
 
-/// Slot `k` of the five arrays as one record.
+/// Slot `k` of the six arrays as one record.
 #[inline(always)]
 fn record(
     tangential: &[DVec3],
@@ -78,6 +82,7 @@ fn record(
     torsion: &[DVec3],
     bridge: &[bool],
     state: &[f64],
+    sliding_state: &[f64],
     k: usize,
 ) -> ContactHistory {
     ContactHistory {
@@ -86,6 +91,7 @@ fn record(
         torsion: torsion[k],
         bridge: bridge[k],
         state: state[k],
+        sliding_state: sliding_state[k],
     }
 }
 
@@ -98,6 +104,7 @@ impl FromIterator<ContactHistory> for HistorySlots {
             slots.torsion.push(h.torsion);
             slots.bridge.push(h.bridge);
             slots.state.push(h.state);
+            slots.sliding_state.push(h.sliding_state);
         }
         slots
     }
@@ -130,6 +137,8 @@ pub struct HistoryView<'a> {
     pub bridge: &'a mut [bool],
     /// The normal law's per-contact state.
     pub state: &'a mut [f64],
+    /// The sliding spring law's per-contact state.
+    pub sliding_state: &'a mut [f64],
 }
 
 impl<'a> HistoryView<'a> {
@@ -150,6 +159,7 @@ impl<'a> HistoryView<'a> {
         let (o0, o1) = self.torsion.split_at_mut(mid);
         let (b0, b1) = self.bridge.split_at_mut(mid);
         let (s0, s1) = self.state.split_at_mut(mid);
+        let (q0, q1) = self.sliding_state.split_at_mut(mid);
         (
             HistoryView {
                 tangential: t0,
@@ -157,6 +167,7 @@ impl<'a> HistoryView<'a> {
                 torsion: o0,
                 bridge: b0,
                 state: s0,
+                sliding_state: q0,
             },
             HistoryView {
                 tangential: t1,
@@ -164,6 +175,7 @@ impl<'a> HistoryView<'a> {
                 torsion: o1,
                 bridge: b1,
                 state: s1,
+                sliding_state: q1,
             },
         )
     }
@@ -176,6 +188,7 @@ impl<'a> HistoryView<'a> {
             self.torsion,
             self.bridge,
             self.state,
+            self.sliding_state,
             k,
         )
     }
@@ -193,6 +206,7 @@ impl<'a> HistoryView<'a> {
         self.torsion[k] = h.torsion;
         self.bridge[k] = h.bridge;
         self.state[k] = h.state;
+        self.sliding_state[k] = h.sliding_state;
     }
 
     /// Empties slot `k`: springs and state at zero, no bridge.
@@ -214,6 +228,7 @@ mod tests {
             torsion: DVec3::new(5.0, 6.0, x),
             bridge: k % 2 == 1,
             state: 0.5 * x,
+            sliding_state: 0.25 * x,
         }
     }
 

@@ -2,8 +2,11 @@
 //! is built by the `rheodem` crate's `bench` module), in model units: the frictional law
 //! and its cohesive variants. The force loop's tests use them too.
 
+use super::normal::hertz::{HertzNormal, Material};
+use super::spring::Mindlin;
 use super::{
-    Adhesion, ContactLaw, Damping, LawKind, LawSpec, LinearNormal, Resistance, Spring, Strength,
+    Adhesion, ContactLaw, Damping, LawKind, LawSpec, LinearNormal, LudingNormal, NormalKind,
+    Resistance, Spring, Strength,
 };
 
 /// The bench's contact law: `k_n = 10⁴`, `k_t = 2/7 k_n`, `γ_n = 27.6941 m_ij`, no
@@ -28,6 +31,54 @@ pub fn bench_law() -> ContactLaw {
         rolling: Spring::NONE,
         torsion: Spring::NONE,
         adhesion: Adhesion::None,
+    }
+}
+
+/// The bench's law with the normal law `kind` in place of the linear one, for the cost of
+/// each normal law on the same problem (model units):
+/// - `linear`: [`bench_law`];
+/// - `hertz`: Hertz with `E = 1.82·10⁵`, `ν = 0.3` (`E* = 10⁵`, whose contact stiffness
+///   `(4/3) E* √(R* δ)` is the linear `k_n = 10⁴` at `δ ≈ 0.02 d`, the steady state's
+///   typical overlap), Tsuji's dashpot for `e = 0.8` (the linear law's restitution) and
+///   Mindlin's sliding spring with `μ = 0.5` and no tangential dashpot;
+/// - `luding`: Luding's law loading along the linear `k_n = 10⁴` with `k_p = 5·10⁴`,
+///   `φ_f = 0.05`, no adhesive branch, the linear law's dashpot and sliding spring.
+pub fn bench_law_with(kind: NormalKind) -> ContactLaw {
+    let base = bench_law();
+    match kind {
+        NormalKind::Linear => base,
+        NormalKind::Hertz => {
+            let material = Material {
+                youngs_modulus: 1.82e5,
+                poisson_ratio: 0.3,
+            };
+            let hertz = HertzNormal::between(&material, &material, 0.8, 1.0);
+            ContactLaw {
+                normal: hertz.into(),
+                tangential: Mindlin {
+                    effective_shear_modulus: hertz.effective_shear_modulus,
+                    dashpot: 0.0,
+                    mu_static: 0.5,
+                    mu_dynamic: 0.5,
+                }
+                .into(),
+                ..base
+            }
+        }
+        NormalKind::Luding => ContactLaw {
+            normal: LudingNormal {
+                stiffness: 1.0e4,
+                max_stiffness: 5.0e4,
+                adhesive_stiffness: 0.0,
+                plasticity_depth: 0.05,
+                damping: Damping {
+                    per_mass: 27.6941,
+                    ..Damping::NONE
+                },
+            }
+            .into(),
+            ..base
+        },
     }
 }
 

@@ -5,9 +5,12 @@ use super::spec::*;
 use super::{ScenarioError, invalid};
 use crate::Simulation;
 use crate::contact::adhesion::LawError;
+use crate::contact::normal::hertz::{HertzNormal, Material, tsuji_alpha};
+use crate::contact::parameters::Parameters;
+use crate::contact::spring::Mindlin;
 use crate::contact::{
-    Adhesion, ContactLaw, ContactTable, Damping, LawSpec, LinearNormal, Normal, Resistance, Spring,
-    SpringKind,
+    Adhesion, ContactLaw, ContactTable, Damping, LawSpec, LinearNormal, Normal, NormalKind,
+    Resistance, Spring, SpringKind,
 };
 use crate::domain::{Domain, ShearDynamics};
 use crate::generate::{
@@ -145,20 +148,81 @@ fn species_index(key: &str, name: &str, species: &[SpeciesSpec]) -> Result<u16, 
         })
 }
 
-/// The normal law of `n` from the registry, and the linear law its springs' ratios refer
-/// to.
-fn normal_law(key: &str, n: &NormalSpec) -> Result<(Normal, LinearNormal), ScenarioError> {
-    let law = n.build().map_err(|e| law_error(key, e))?;
-    Ok((law, law.reference()))
+/// The normal law of `n` from the registry for a pair of species `a`, `b`: Hertz's law
+/// takes the elastic constants and the restitution it omits from the two species.
+fn normal_law(
+    key: &str,
+    n: &NormalSpec,
+    a: &SpeciesSpec,
+    b: &SpeciesSpec,
+) -> Result<Normal, ScenarioError> {
+    if n.law != NormalKind::Hertz {
+        return n.build().map_err(|e| law_error(key, e));
+    }
+    n.parameters().check_keys().map_err(|e| law_error(key, e))?;
+    let material = |sp: &SpeciesSpec| -> Result<Material, ScenarioError> {
+        let mut values = n.values.clone();
+        for (k, v) in [
+            ("youngs_modulus", sp.youngs_modulus),
+            ("poisson_ratio", sp.poisson_ratio),
+        ] {
+            match (values.contains_key(k), v) {
+                (true, _) => {}
+                (false, Some(v)) => {
+                    values.insert(k.into(), v);
+                }
+                (false, None) => {
+                    return Err(invalid(
+                        format!("{key}.{k}"),
+                        "(missing)",
+                        format!(
+                            "give it in the hertz law or as `{k}` of species \"{}\"",
+                            sp.name
+                        ),
+                    ));
+                }
+            }
+        }
+        let p = Parameters::of("hertz", n.law.info().parameters, &values);
+        HertzNormal::material(&p).map_err(|e| {
+            if n.values.contains_key(&e.key) {
+                law_error(key, e)
+            } else {
+                invalid(
+                    format!("species \"{}\".{}", sp.name, e.key),
+                    e.value,
+                    e.reason,
+                )
+            }
+        })
+    };
+    let restitution = match (n.value("restitution"), a.restitution, b.restitution) {
+        (Some(e), _, _) => e,
+        (None, Some(e_a), Some(e_b)) => (e_a * e_b).sqrt(),
+        (None, Some(e), None) | (None, None, Some(e)) => e,
+        (None, None, None) => 1.0,
+    };
+    let mut values = n.values.clone();
+    values.insert("restitution".into(), restitution);
+    let p = Parameters::of("hertz", n.law.info().parameters, &values);
+    let checked = |k: &str| p.require(k).map_err(|e| law_error(key, e));
+    Ok(HertzNormal::between(
+        &material(a)?,
+        &material(b)?,
+        checked("restitution")?,
+        checked("impact_speed")?,
+    )
+    .into())
 }
 
-/// A spring of the contact: none when not given, else the registry's law named by `law`
-/// (the linear spring–dashpot–Coulomb law by default) from its keys; ratios are taken of the
-/// normal law `normal`.
+/// A spring of the contact (`role`: friction, rolling or torsion): none when not given,
+/// else the registry's law named by `law` (the linear spring–dashpot–Coulomb law by
+/// default) from its keys; ratios are taken of the normal law's linear reference.
 fn spring(
     key: &str,
+    role: &str,
     r: &Option<ResistanceSpec>,
-    normal: &LinearNormal,
+    normal: &Normal,
 ) -> Result<Spring, ScenarioError> {
     let Some(r) = r else {
         return Ok(Spring::NONE);
@@ -169,59 +233,69 @@ fn spring(
             .map_err(|reason| invalid(format!("{key}.law"), format!("\"{name}\""), reason))?,
     };
     match kind {
-        SpringKind::Linear => Ok(resistance(key, r, normal)?.into()),
+        SpringKind::Linear => Ok(resistance(key, r, normal.reference().as_ref())?.into()),
+        SpringKind::Mindlin => Ok(mindlin(key, role, r, normal)?.into()),
     }
 }
 
-/// The linear spring–dashpot–Coulomb law from its keys.
-fn resistance(
+/// Mindlin's sliding spring from its keys (`mu` or `mu_static`/`mu_dynamic`, and
+/// `damping_ratio`, the fraction of Tsuji's normal dashpot), with `G*` of the contact's
+/// Hertz normal law.
+fn mindlin(
     key: &str,
+    role: &str,
     r: &ResistanceSpec,
-    normal: &LinearNormal,
-) -> Result<Resistance, ScenarioError> {
-    at_most_one(
-        key,
-        &[
-            ("stiffness", r.stiffness.is_some()),
-            ("stiffness_ratio", r.stiffness_ratio.is_some()),
-        ],
-    )?;
-    let stiffness = match (r.stiffness, r.stiffness_ratio) {
-        (Some(k), _) => non_negative(&format!("{key}.stiffness"), k)?,
-        (None, Some(q)) => non_negative(&format!("{key}.stiffness_ratio"), q)? * normal.stiffness,
-        (None, None) => {
+    normal: &Normal,
+) -> Result<Mindlin, ScenarioError> {
+    if role != "friction" {
+        return Err(invalid(
+            format!("{key}.law"),
+            "\"mindlin\"",
+            "Mindlin's spring is a sliding-friction law: use it under `friction`, not for rolling or torsion",
+        ));
+    }
+    let Some(hertz) = normal.hertz() else {
+        return Err(invalid(
+            format!("{key}.law"),
+            "\"mindlin\"",
+            format!(
+                "Mindlin's spring takes G* from a hertz normal law; this contact's normal law is {}",
+                normal.kind()
+            ),
+        ));
+    };
+    for (k, given) in [
+        ("stiffness", r.stiffness.is_some()),
+        ("stiffness_ratio", r.stiffness_ratio.is_some()),
+        ("damping", r.damping.is_some()),
+        ("damping_per_mass", r.damping_per_mass.is_some()),
+    ] {
+        if given {
             return Err(invalid(
-                format!("{key}.stiffness"),
-                "(missing)",
-                "give `stiffness` (N/m) or `stiffness_ratio` (fraction of k_n)",
+                format!("{key}.{k}"),
+                "(given)",
+                "Mindlin's stiffness is 8 G* √(R* δ) from the hertz law and its dashpot a `damping_ratio` of the normal one; give only mu (or mu_static, mu_dynamic) and damping_ratio",
             ));
         }
-    };
-    at_most_one(
-        key,
-        &[
-            ("damping", r.damping.is_some()),
-            ("damping_ratio", r.damping_ratio.is_some()),
-            ("damping_per_mass", r.damping_per_mass.is_some()),
-        ],
+    }
+    let (mu_s, mu_d) = coulomb(key, r)?;
+    let x_t = non_negative(
+        &format!("{key}.damping_ratio"),
+        r.damping_ratio.unwrap_or(0.0),
     )?;
-    let damping = if let Some(g) = r.damping {
-        Damping {
-            fixed: non_negative(&format!("{key}.damping"), g)?,
-            ..Damping::NONE
-        }
-    } else if let Some(q) = r.damping_ratio {
-        normal
-            .damping
-            .scaled(non_negative(&format!("{key}.damping_ratio"), q)?)
-    } else if let Some(g) = r.damping_per_mass {
-        Damping {
-            per_mass: non_negative(&format!("{key}.damping_per_mass"), g)?,
-            ..Damping::NONE
-        }
-    } else {
-        Damping::NONE
-    };
+    Ok(Mindlin {
+        effective_shear_modulus: hertz.effective_shear_modulus,
+        dashpot: x_t
+            * std::f64::consts::SQRT_2
+            * tsuji_alpha(hertz.restitution)
+            * (4.0 / 3.0 * hertz.effective_modulus).sqrt(),
+        mu_static: mu_s,
+        mu_dynamic: mu_d,
+    })
+}
+
+/// The Coulomb coefficients `(μ_s, μ_d)` of a spring's keys.
+fn coulomb(key: &str, r: &ResistanceSpec) -> Result<(f64, f64), ScenarioError> {
     let (mu_s, mu_d) = match (r.mu, r.mu_static, r.mu_dynamic) {
         (Some(m), None, None) => (m, m),
         (None, Some(s), Some(d)) => (s, d),
@@ -250,6 +324,72 @@ fn resistance(
             format!("must not exceed mu_static = {mu_s}"),
         ));
     }
+    Ok((mu_s, mu_d))
+}
+
+/// The linear spring–dashpot–Coulomb law from its keys; `normal` is the linear law its
+/// ratios refer to (`None` beside a normal law without one, which refuses the ratios).
+fn resistance(
+    key: &str,
+    r: &ResistanceSpec,
+    normal: Option<&LinearNormal>,
+) -> Result<Resistance, ScenarioError> {
+    let reference = |ratio: &str| {
+        normal.ok_or_else(|| {
+            invalid(
+                format!("{key}.{ratio}"),
+                "(given)",
+                "the contact's normal law has no linear stiffness to take a ratio of: give `stiffness` and `damping` (or use law = \"mindlin\" beside hertz)",
+            )
+        })
+    };
+    at_most_one(
+        key,
+        &[
+            ("stiffness", r.stiffness.is_some()),
+            ("stiffness_ratio", r.stiffness_ratio.is_some()),
+        ],
+    )?;
+    let stiffness = match (r.stiffness, r.stiffness_ratio) {
+        (Some(k), _) => non_negative(&format!("{key}.stiffness"), k)?,
+        (None, Some(q)) => {
+            non_negative(&format!("{key}.stiffness_ratio"), q)?
+                * reference("stiffness_ratio")?.stiffness
+        }
+        (None, None) => {
+            return Err(invalid(
+                format!("{key}.stiffness"),
+                "(missing)",
+                "give `stiffness` (N/m) or `stiffness_ratio` (fraction of k_n)",
+            ));
+        }
+    };
+    at_most_one(
+        key,
+        &[
+            ("damping", r.damping.is_some()),
+            ("damping_ratio", r.damping_ratio.is_some()),
+            ("damping_per_mass", r.damping_per_mass.is_some()),
+        ],
+    )?;
+    let damping = if let Some(g) = r.damping {
+        Damping {
+            fixed: non_negative(&format!("{key}.damping"), g)?,
+            ..Damping::NONE
+        }
+    } else if let Some(q) = r.damping_ratio {
+        reference("damping_ratio")?
+            .damping
+            .scaled(non_negative(&format!("{key}.damping_ratio"), q)?)
+    } else if let Some(g) = r.damping_per_mass {
+        Damping {
+            per_mass: non_negative(&format!("{key}.damping_per_mass"), g)?,
+            ..Damping::NONE
+        }
+    } else {
+        Damping::NONE
+    };
+    let (mu_s, mu_d) = coulomb(key, r)?;
     if stiffness == 0.0 && damping.is_zero() && mu_s > 0.0 {
         return Err(invalid(
             format!("{key}.stiffness"),
@@ -285,18 +425,11 @@ pub fn law_error(key: &str, e: LawError) -> ScenarioError {
 /// The validated contact laws of a scenario, indexed by species in declaration order.
 pub fn contact_table(s: &Scenario) -> Result<ContactTable, ScenarioError> {
     let ns = s.species.len();
+    // Which [[contact]] gives each pair's law: the default, then the pairs named.
     let mut default = None;
-    let mut pairs = Vec::new();
+    let mut named: Vec<(usize, usize, usize)> = Vec::new();
     for (k, c) in s.contacts.iter().enumerate() {
         let key = format!("contact[{k}]");
-        let (normal_law, normal) = normal_law(&format!("{key}.normal"), &c.normal)?;
-        let law = ContactLaw {
-            normal: normal_law,
-            tangential: spring(&format!("{key}.friction"), &c.friction, &normal)?,
-            rolling: spring(&format!("{key}.rolling"), &c.rolling, &normal)?,
-            torsion: spring(&format!("{key}.torsion"), &c.torsion, &normal)?,
-            adhesion: adhesion(&format!("{key}.adhesion"), &c.adhesion)?,
-        };
         match &c.species {
             None if default.is_some() => {
                 return Err(invalid(
@@ -305,11 +438,11 @@ pub fn contact_table(s: &Scenario) -> Result<ContactTable, ScenarioError> {
                     "only one default [[contact]] (without `species`) is allowed",
                 ));
             }
-            None => default = Some(law),
+            None => default = Some(k),
             Some([a, b]) => {
                 let ia = species_index(&format!("{key}.species[0]"), a, &s.species)? as usize;
                 let ib = species_index(&format!("{key}.species[1]"), b, &s.species)? as usize;
-                if pairs
+                if named
                     .iter()
                     .any(|&(x, y, _)| (x, y) == (ia, ib) || (x, y) == (ib, ia))
                 {
@@ -319,16 +452,22 @@ pub fn contact_table(s: &Scenario) -> Result<ContactTable, ScenarioError> {
                         "this pair already has a contact law",
                     ));
                 }
-                pairs.push((ia, ib, law));
+                named.push((ia, ib, k));
             }
         }
+        // Every [[contact]] is checked, also one that no pair ends up using.
+        let (a, b) = match named.last() {
+            Some(&(a, b, last)) if last == k => (a, b),
+            _ => (0, 0),
+        };
+        contact_law(s, k, a, b)?;
     }
-    let mut covered = vec![default.is_some(); ns * ns];
-    for &(a, b, _) in &pairs {
-        covered[a * ns + b] = true;
-        covered[b * ns + a] = true;
+    let mut given = vec![default; ns * ns];
+    for &(a, b, k) in &named {
+        given[a * ns + b] = Some(k);
+        given[b * ns + a] = Some(k);
     }
-    if let Some(missing) = covered.iter().position(|c| !c) {
+    if let Some(missing) = given.iter().position(Option::is_none) {
         let (a, b) = (missing / ns, missing % ns);
         return Err(invalid(
             "contact",
@@ -339,12 +478,34 @@ pub fn contact_table(s: &Scenario) -> Result<ContactTable, ScenarioError> {
             "give a default [[contact]] without `species`, or one for every species pair",
         ));
     }
-    let first = default.unwrap_or_else(|| pairs[0].2);
-    let mut table = ContactTable::uniform(ns, first);
-    for (a, b, law) in pairs {
-        table.set(a, b, law);
+    let mut table = ContactTable::uniform(ns, contact_law(s, given[0].unwrap_or(0), 0, 0)?);
+    for a in 0..ns {
+        for b in a..ns {
+            if (a, b) != (0, 0) {
+                table.set(a, b, contact_law(s, given[a * ns + b].unwrap_or(0), a, b)?);
+            }
+        }
     }
     Ok(table)
+}
+
+/// The law `[[contact]]` number `k` gives the pair of species `a`, `b`.
+fn contact_law(s: &Scenario, k: usize, a: usize, b: usize) -> Result<ContactLaw, ScenarioError> {
+    let c = &s.contacts[k];
+    let key = format!("contact[{k}]");
+    let normal = normal_law(
+        &format!("{key}.normal"),
+        &c.normal,
+        &s.species[a],
+        &s.species[b],
+    )?;
+    Ok(ContactLaw {
+        normal,
+        tangential: spring(&format!("{key}.friction"), "friction", &c.friction, &normal)?,
+        rolling: spring(&format!("{key}.rolling"), "rolling", &c.rolling, &normal)?,
+        torsion: spring(&format!("{key}.torsion"), "torsion", &c.torsion, &normal)?,
+        adhesion: adhesion(&format!("{key}.adhesion"), &c.adhesion)?,
+    })
 }
 
 fn motion(key: &str, m: &MotionSpec) -> Result<Motion, ScenarioError> {
@@ -1074,7 +1235,10 @@ fn weight_within_limits(
         .min_by(|&a, &b| particles.mass[a].total_cmp(&particles.mass[b]));
     let Some(i) = lightest else { return Ok(()) };
     let sp = particles.species[i];
-    let k_n = laws.get(sp, sp).normal.max_stiffness();
+    let k_n = laws
+        .get(sp, sp)
+        .normal
+        .max_stiffness(0.5 * particles.radius[i]);
     let (m, a) = (particles.mass[i], particles.radius[i]);
     if m * g > max_overlap * a * k_n {
         return Err(invalid(

@@ -173,6 +173,16 @@ pub struct SpeciesSpec {
     pub name: String,
     /// Density (kg/m³), positive.
     pub density: f64,
+    /// Young's modulus `E` (Pa), which a `hertz` normal law takes where it gives none.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub youngs_modulus: Option<f64>,
+    /// Poisson's ratio `ν`, which a `hertz` normal law takes where it gives none.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub poisson_ratio: Option<f64>,
+    /// Restitution coefficient `e`, which a `hertz` normal law takes where it gives none
+    /// (a pair of species mixes `√(e_i e_j)`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub restitution: Option<f64>,
 }
 
 /// The contact law of a species pair (or the default one).

@@ -67,6 +67,24 @@ fn default_snapshots() -> u64 {
 fn default_checkpoints() -> u64 {
     40
 }
+fn default_plastic_ratio() -> f64 {
+    5.0
+}
+fn default_plasticity_depth() -> f64 {
+    0.05
+}
+
+/// The normal law of a shear-box point.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum BoxNormal {
+    /// The linear spring and dashpot `k_n δ + γ_n δ̇` (the papers').
+    #[default]
+    Linear,
+    /// Luding's elasto-plastic law loading along `k_n` (docs/model.md §2.9), whose adhesive
+    /// branch carries the point's cohesion.
+    Luding,
+}
 
 /// A shear-box point: dimensionless controls and material.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -148,6 +166,18 @@ pub struct ShearBoxSpec {
     /// `fields/`) for `rheodem cg` to coarse-grain again; needs `cg_slabs` > 0.
     #[serde(default)]
     pub cg_records: bool,
+    /// Normal law: `"linear"` (default) or `"luding"`, Luding's elasto-plastic law loading
+    /// along `k_n`; with `Bo > 0` its adhesive stiffness `k_c` is set so that a contact
+    /// loaded to the plastic limit pulls off with `f_a^max = Bo p d_p²` (the mean pair), and
+    /// `cohesion` stays `none`.
+    #[serde(default)]
+    pub normal_law: BoxNormal,
+    /// Luding's largest unloading stiffness in units of `k_n`, `k_p/k_n` (default 5).
+    #[serde(default = "default_plastic_ratio")]
+    pub plastic_ratio: f64,
+    /// Luding's plasticity depth `φ_f` (default 0.05).
+    #[serde(default = "default_plasticity_depth")]
+    pub plasticity_depth: f64,
 }
 
 fn default_cg_kernel() -> KernelShape {
@@ -287,6 +317,25 @@ impl SetUpSchema for ShearBoxSpec {
             "Also store the fields' samples (particles, contacts, box under fields/) for \
              `rheodem cg` to coarse-grain the run again; needs cg_slabs > 0",
         ),
+        Field::choice(
+            "normal_law",
+            "Normal law (luding: elasto-plastic, loading along k_n; with Bo > 0 its \
+             adhesive branch pulls a contact loaded to the plastic limit off with \
+             f_a^max = Bo p d_p², and cohesion stays none)",
+            &["linear", "luding"],
+        ),
+        Field::number(
+            "plastic_ratio",
+            "",
+            "Luding's largest unloading stiffness k_p/k_n",
+            Range::AboveUpTo(1.0, 1000.0),
+        ),
+        Field::number(
+            "plasticity_depth",
+            "",
+            "Luding's plasticity depth φ_f",
+            Range::AboveUpTo(0.0, 1.0),
+        ),
     ];
 
     fn defaults() -> toml::Table {
@@ -412,12 +461,22 @@ impl ShearBoxSpec {
                 "stores the fields' samples: it needs cg_slabs > 0",
             ));
         }
-        if bo > 0.0 && self.cohesion == LawKind::None {
-            return Err(invalid(
-                "cohesion",
-                "\"none\"",
-                "a positive bond number needs a cohesion law (reversible, liquid_bridge, linear_irreversible)",
-            ));
+        match self.normal_law {
+            BoxNormal::Linear if bo > 0.0 && self.cohesion == LawKind::None => {
+                return Err(invalid(
+                    "cohesion",
+                    "\"none\"",
+                    "a positive bond number needs a cohesion law (reversible, liquid_bridge, linear_irreversible), or normal_law = \"luding\"",
+                ));
+            }
+            BoxNormal::Luding if self.cohesion != LawKind::None => {
+                return Err(invalid(
+                    "cohesion",
+                    format!("\"{}\"", self.cohesion),
+                    "with normal_law = \"luding\" the law's own adhesive branch carries Bo: leave cohesion = none",
+                ));
+            }
+            _ => {}
         }
         // Lees-Edwards needs the sheared box at least three neighbour cells wide; a cell
         // holds the largest pair plus the attraction range and the skin (0.1 d_p). The
@@ -445,6 +504,9 @@ impl ShearBoxSpec {
         }
         let p = ps * k / d;
         let shear_rate = i * (p / rho).sqrt() / d;
+        if self.normal_law == BoxNormal::Luding {
+            self.luding_adhesive_stiffness(bo * p * d * d)?;
+        }
         Ok(Derived {
             pressure: p,
             shear_rate,
@@ -454,6 +516,27 @@ impl ShearBoxSpec {
             pressure_time: d * (rho / p).sqrt(),
             duration: strain / shear_rate,
         })
+    }
+
+    /// Luding's adhesive stiffness `k_c` (N/m) that pulls a contact of the mean pair
+    /// (`r = d_p/2`) loaded to the plastic limit off with `f` (N): at the limit the
+    /// unloading line has slope `k_p` and meets the adhesive branch at
+    /// `f = k_c (k_p − k_1) δ_max^p/(k_p + k_c)` with `(k_p − k_1) δ_max^p = k_p φ_f r`, so
+    /// `k_c = f k_p/(k_p φ_f r − f)`; an error when `f` is beyond what any `k_c` gives.
+    pub fn luding_adhesive_stiffness(&self, f: f64) -> Result<f64, ScenarioError> {
+        let k_p = self.plastic_ratio * self.stiffness;
+        let reach = k_p * self.plasticity_depth * 0.5 * self.diameter;
+        if f >= reach {
+            return Err(invalid(
+                "bond",
+                self.bond,
+                format!(
+                    "Luding's law pulls off with less than k_p φ_f d_p/2 = {reach:.4e} N; \
+                     Bo p d_p² = {f:.4e} N needs a larger plastic_ratio or plasticity_depth"
+                ),
+            ));
+        }
+        Ok(f * k_p / (reach - f))
     }
 
     /// The scenario that runs this point.
@@ -475,8 +558,30 @@ impl ShearBoxSpec {
             normal_stiffness: self.stiffness,
             mean_diameter: d,
         };
-        let adhesion = (self.bond > 0.0)
+        let adhesion = (self.bond > 0.0 && self.normal_law == BoxNormal::Linear)
             .then(|| LawSpec::new(self.cohesion, self.cohesion.at_strength(&strength)));
+        let normal = match self.normal_law {
+            BoxNormal::Linear => NormalSpec::new(
+                NormalKind::Linear,
+                [
+                    ("stiffness", self.stiffness),
+                    ("restitution", self.restitution),
+                ],
+            ),
+            BoxNormal::Luding => NormalSpec::new(
+                NormalKind::Luding,
+                [
+                    ("stiffness", self.stiffness),
+                    ("max_stiffness", self.plastic_ratio * self.stiffness),
+                    (
+                        "adhesive_stiffness",
+                        self.luding_adhesive_stiffness(dv.max_force)?,
+                    ),
+                    ("plasticity_depth", self.plasticity_depth),
+                    ("restitution", self.restitution),
+                ],
+            ),
+        };
         let friction = (self.mu_p > 0.0).then(|| ResistanceSpec {
             law: None,
             stiffness: None,
@@ -491,12 +596,13 @@ impl ShearBoxSpec {
         let rows = (self.rows_per_strain * self.strain).ceil().max(1.0) as u64;
         Ok(Scenario {
             title: Some(format!(
-                "shear box: mu_p = {}, I = {}, p* = {}, Bo = {} ({:?}), w = {}, N = {}",
+                "shear box: mu_p = {}, I = {}, p* = {}, Bo = {} ({:?}, {:?} normal law), w = {}, N = {}",
                 self.mu_p,
                 self.inertial,
                 self.softness,
                 self.bond,
                 self.cohesion,
+                self.normal_law,
                 w,
                 self.particles
             )),
@@ -511,16 +617,13 @@ impl ShearBoxSpec {
             species: vec![SpeciesSpec {
                 name: "grain".into(),
                 density: self.density,
+                youngs_modulus: None,
+                poisson_ratio: None,
+                restitution: None,
             }],
             contacts: vec![ContactSpec {
                 species: None,
-                normal: NormalSpec::new(
-                    NormalKind::Linear,
-                    [
-                        ("stiffness", self.stiffness),
-                        ("restitution", self.restitution),
-                    ],
-                ),
+                normal,
                 friction,
                 rolling: None,
                 torsion: None,

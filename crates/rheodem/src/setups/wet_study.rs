@@ -54,6 +54,14 @@ pub enum Adhesion {
     },
     /// Linear irreversible adhesion.
     Linear,
+    /// Rabinovich bridges of volume `volume` (m³) and surface tension `surface_tension`
+    /// (N/m), compared with Willett's of the same values (not part of the papers' fits).
+    Rabinovich {
+        /// `V_b` (m³).
+        volume: f64,
+        /// `γ_s` (N/m).
+        surface_tension: f64,
+    },
 }
 
 /// One finished run with band rheology, in the papers' scaled units.
@@ -214,14 +222,21 @@ impl WetRun {
                 },
                 s.groups.surface_tension_scaled,
             ),
+            LawKind::Rabinovich => (
+                Adhesion::Rabinovich {
+                    volume: value("volume")?,
+                    surface_tension: value("surface_tension")?,
+                },
+                s.groups.surface_tension_scaled,
+            ),
             LawKind::LinearIrreversible => (
                 Adhesion::Linear,
                 value("max_force")? / fg / (std::f64::consts::PI * 20f64.to_radians().cos()),
             ),
             other => {
                 return Err(format!(
-                    "{name}: law {other} is not part of the wet study (dry, Willett or linear \
-                     irreversible)"
+                    "{name}: law {other} is not part of the wet study (dry, Willett, Rabinovich \
+                     or linear irreversible)"
                 ));
             }
         };
@@ -448,6 +463,10 @@ fn wet_against_dry(md: &mut String, runs: &[WetRun], mu: Option<f64>) {
                 volume,
                 surface_tension,
             } => format!("Willett {} nl, {surface_tension} N/m", volume * 1e12),
+            Adhesion::Rabinovich {
+                volume,
+                surface_tension,
+            } => format!("Rabinovich {} nl, {surface_tension} N/m", volume * 1e12),
             Adhesion::Linear => "linear irreversible".into(),
             Adhesion::Dry => continue,
         };
@@ -501,6 +520,10 @@ pub fn wet_study(runs: &[WetRun], mu: Option<f64>) -> Result<WetStudy, String> {
                 volume,
                 surface_tension,
             } => format!("Willett {:.0} nl, {surface_tension} N/m", volume * 1e12),
+            Adhesion::Rabinovich {
+                volume,
+                surface_tension,
+            } => format!("Rabinovich {:.0} nl, {surface_tension} N/m", volume * 1e12),
             Adhesion::Linear => "linear irreversible".into(),
         };
         let _ = writeln!(

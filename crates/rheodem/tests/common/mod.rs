@@ -210,3 +210,35 @@ pub fn linear_fit(x: &[f64], y: &[f64]) -> (f64, f64) {
     let slope = sxy / sxx;
     (my - slope * mx, slope)
 }
+
+/// Runs `sim` for `steps` steps on one thread (the same realisation of the integration
+/// error on every machine), sampling the total energy every `every` steps with a measuring
+/// step. Returns `(relative drift, relative RMS fluctuation, mean Z)`: the drift is the
+/// slope of the least-squares line through the samples times the sampled time span, over
+/// the mean energy.
+pub fn energy_drift(sim: &mut Simulation, steps: u64, every: u64) -> (f64, f64, f64) {
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .expect("thread pool");
+    let (t, energy, z) = pool.install(|| {
+        let (mut t, mut energy, mut z) = (Vec::new(), Vec::new(), 0.0);
+        for k in 1..=steps {
+            let measure = k % every == 0;
+            sim.step(measure).expect("step");
+            if measure {
+                let obs = sim.observables();
+                t.push(sim.time);
+                energy.push(obs.total_energy());
+                z += obs.coordination;
+            }
+        }
+        (t, energy, z)
+    });
+    let n = energy.len() as f64;
+    let mean = energy.iter().sum::<f64>() / n;
+    let (_, slope) = linear_fit(&t, &energy);
+    let drift = slope * (t[t.len() - 1] - t[0]) / mean;
+    let rms = (energy.iter().map(|e| (e - mean).powi(2)).sum::<f64>() / n).sqrt() / mean;
+    (drift, rms, z / n)
+}

@@ -18,6 +18,8 @@
 //!   `S_c = (1 + θ/2) V_b^{1/3}`.
 //! - [`LinearIrreversible`]: the bridge's loading path with a linear separation branch
 //!   `−(f_max − k_c S)`, rupture at `S_c = f_max / k_c`.
+//! - [`Rabinovich`]: wet, Rabinovich's capillary force of a fixed-volume bridge with its
+//!   filling-angle term, formed at contact, ruptured past `S_c = (1 + θ/2) V_b^{1/3}`.
 //!
 //! Adding a law: write one file beside these with a parameter struct implementing
 //! [`AdhesiveLaw`] and its resolved form implementing [`ResolvedLaw`], declare the module
@@ -26,12 +28,14 @@
 
 pub mod linear_irreversible;
 pub mod parameters;
+pub mod rabinovich;
 pub mod reversible;
 pub mod willett;
 
 pub use super::parameters::{Bounds, LawError, Parameter, Parameters, Spec};
 pub use linear_irreversible::LinearIrreversible;
 pub use parameters::{LawSpec, Strength};
+pub use rabinovich::Rabinovich;
 pub use reversible::Reversible;
 pub use willett::{LiquidBridge, willett_factor};
 
@@ -307,6 +311,8 @@ adhesive_laws! {
     LiquidBridge => LiquidBridge,
     /// Irreversible linear adhesion (Roy et al. 2016, Eqs. 16–17).
     LinearIrreversible => LinearIrreversible,
+    /// Irreversible Rabinovich liquid bridge (Rabinovich et al. 2005; Lian et al. 1993).
+    Rabinovich => Rabinovich,
 }
 
 impl LawKind {

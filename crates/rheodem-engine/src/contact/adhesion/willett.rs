@@ -67,6 +67,29 @@ pub struct ResolvedBridge {
 /// The contact angle of the source papers (Shi et al. 2020, Roy et al. 2016), degrees.
 pub const PAPERS_CONTACT_ANGLE_DEG: f64 = 20.0;
 
+/// The surface tension of a liquid bridge's law (Willett's, Rabinovich's).
+pub const SURFACE_TENSION: Parameter = Parameter {
+    key: "surface_tension",
+    unit: "N/m",
+    meaning: "surface tension γ_s of the liquid",
+    bounds: Bounds::Positive,
+    default: None,
+    note: "",
+    instead_of: None,
+};
+
+/// The contact angle of a liquid bridge's law (Willett's, Rabinovich's), the papers' 20° by
+/// default.
+pub const CONTACT_ANGLE: Parameter = Parameter {
+    key: "contact_angle_deg",
+    unit: "degrees",
+    meaning: "contact angle θ",
+    bounds: Bounds::HalfOpen(0.0, 90.0),
+    default: Some(PAPERS_CONTACT_ANGLE_DEG),
+    note: ": a bridge with θ ≥ 90° does not attract",
+    instead_of: None,
+};
+
 impl AdhesiveLaw for LiquidBridge {
     const NAME: &'static str = "liquid_bridge";
     const ALIASES: &'static [&'static str] = &["willett"];
@@ -74,24 +97,8 @@ impl AdhesiveLaw for LiquidBridge {
         -2 pi r gamma cos(theta) / (1 + 1.05 S + 2.5 S^2) apart, ruptured at \
         (1 + theta/2) V^(1/3) (Roy et al. 2016, Eqs. 10-15).";
     const PARAMETERS: &'static [Parameter] = &[
-        Parameter {
-            key: "surface_tension",
-            unit: "N/m",
-            meaning: "surface tension γ_s of the liquid",
-            bounds: Bounds::Positive,
-            default: None,
-            note: "",
-            instead_of: None,
-        },
-        Parameter {
-            key: "contact_angle_deg",
-            unit: "degrees",
-            meaning: "contact angle θ",
-            bounds: Bounds::HalfOpen(0.0, 90.0),
-            default: Some(PAPERS_CONTACT_ANGLE_DEG),
-            note: ": a bridge with θ ≥ 90° does not attract",
-            instead_of: None,
-        },
+        SURFACE_TENSION,
+        CONTACT_ANGLE,
         Parameter {
             key: "volume",
             unit: "m³",

@@ -161,8 +161,8 @@ impl NormalModel for LinearNormal {
         })
     }
 
-    fn reference(&self) -> LinearNormal {
-        *self
+    fn reference(&self) -> Option<LinearNormal> {
+        Some(*self)
     }
 
     const ALIASES: &'static [&'static str] = &["hooke"];
@@ -173,11 +173,11 @@ impl NormalModel for LinearNormal {
         *self
     }
 
-    fn max_stiffness(&self) -> f64 {
+    fn max_stiffness(&self, _r_ij: f64) -> f64 {
         self.stiffness
     }
 
-    fn contact_time(&self, m_ij: f64) -> Option<f64> {
+    fn contact_time(&self, m_ij: f64, _r_ij: f64) -> Option<f64> {
         LinearNormal::contact_time(self, m_ij)
     }
 

@@ -173,11 +173,8 @@ impl NormalModel for LudingNormal {
     }
 
     /// The loading line `k_1` with the law's dashpot.
-    fn reference(&self) -> LinearNormal {
-        LinearNormal {
-            stiffness: self.stiffness,
-            damping: self.damping,
-        }
+    fn reference(&self) -> Option<LinearNormal> {
+        Some(self.loading())
     }
 
     const ALIASES: &'static [&'static str] = &["elasto_plastic", "linear_plastic"];
@@ -189,19 +186,19 @@ impl NormalModel for LudingNormal {
     }
 
     /// `k_p`, the stiffest line a contact follows.
-    fn max_stiffness(&self) -> f64 {
+    fn max_stiffness(&self, _r_ij: f64) -> f64 {
         self.max_stiffness
     }
 
     /// The contact time of the `k_p` line (the shortest a branch gives).
-    fn contact_time(&self, m_ij: f64) -> Option<f64> {
+    fn contact_time(&self, m_ij: f64, _r_ij: f64) -> Option<f64> {
         self.stiffest().contact_time(m_ij)
     }
 
     /// The restitution of the loading line `k_1` with the law's dashpot, as a scenario's
     /// `restitution` sets it (an elastic bound: a plastic collision restitutes less).
     fn restitution(&self, m_ij: f64) -> Option<f64> {
-        self.reference().restitution(m_ij)
+        self.loading().restitution(m_ij)
     }
 
     fn damping_scaled(&self, factor: f64) -> LudingNormal {
@@ -213,6 +210,14 @@ impl NormalModel for LudingNormal {
 }
 
 impl LudingNormal {
+    /// The loading line `k_1` with this law's dashpot.
+    fn loading(&self) -> LinearNormal {
+        LinearNormal {
+            stiffness: self.stiffness,
+            damping: self.damping,
+        }
+    }
+
     /// The linear law along the `k_p` line with this law's dashpot.
     fn stiffest(&self) -> LinearNormal {
         LinearNormal {

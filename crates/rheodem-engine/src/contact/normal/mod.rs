@@ -13,6 +13,8 @@
 //! - [`LinearNormal`]: the linear spring and dashpot `k_n δ + γ_n dδ/dt`.
 //! - [`LudingNormal`]: Luding's elasto-plastic adhesive spring, whose largest overlap
 //!   reached is its per-contact state.
+//! - [`HertzNormal`]: Hertz's elastic force with Tsuji's dashpot, from the materials'
+//!   Young's moduli and Poisson's ratios.
 //!
 //! Adding a law: write one file beside `linear.rs` with a parameter struct implementing
 //! [`NormalModel`] and a resolved form implementing [`NormalForce`], declare the module
@@ -20,9 +22,11 @@
 //! stored as its bare parameters (the form contact laws had before the registry, so older
 //! checkpoints load); every other law is stored tagged with its variant name.
 
+pub mod hertz;
 pub mod linear;
 pub mod luding;
 
+pub use hertz::{HertzNormal, Material};
 pub use linear::LinearNormal;
 pub use luding::LudingNormal;
 
@@ -51,21 +55,22 @@ pub trait NormalModel: Copy + Debug + PartialEq + Serialize + DeserializeOwned {
     fn from_parameters(p: &Parameters<'_>) -> Result<Self, LawError>;
 
     /// The linear law the springs' ratios refer to (a scenario's `stiffness_ratio` is a
-    /// fraction of its `k_n`, `damping_ratio` of its dashpot): the law itself when linear.
-    fn reference(&self) -> LinearNormal;
+    /// fraction of its `k_n`, `damping_ratio` of its dashpot): the law itself when linear;
+    /// `None` for a law without a linear stiffness (springs then give their own).
+    fn reference(&self) -> Option<LinearNormal>;
 
     /// The law with its constants resolved.
     fn resolve(&self) -> Self::Resolved;
 
-    /// The largest stiffness (N/m) a contact follows, which overlap bounds are set from:
-    /// `k_n` of a linear law; a law whose stiffness grows without bound with the overlap
-    /// says at which overlap it quotes it.
-    fn max_stiffness(&self) -> f64;
+    /// The largest stiffness (N/m) a contact of reduced radius `r_ij = a_i a_j/(a_i + a_j)`
+    /// (m) follows, which overlap bounds are set from: `k_n` of a linear law; a law whose
+    /// stiffness grows without bound with the overlap says at which overlap it quotes it.
+    fn max_stiffness(&self, r_ij: f64) -> f64;
 
-    /// Duration (s) of a binary collision of reduced mass `m_ij` (kg) under this law, or
-    /// `None` when the contact is overdamped (a law whose collisions depend on the impact
-    /// speed says at which speed it quotes it).
-    fn contact_time(&self, m_ij: f64) -> Option<f64>;
+    /// Duration (s) of a binary collision of reduced mass `m_ij` (kg) and reduced radius
+    /// `r_ij` (m) under this law, or `None` when the contact is overdamped (a law whose
+    /// collisions depend on the impact speed says at which speed it quotes it).
+    fn contact_time(&self, m_ij: f64, r_ij: f64) -> Option<f64>;
 
     /// Restitution coefficient of a binary collision of reduced mass `m_ij` (kg), or `None`
     /// when overdamped.
@@ -203,34 +208,35 @@ macro_rules! normal_laws {
             }
 
             /// [`NormalModel::reference`].
-            pub fn reference(&self) -> LinearNormal {
+            pub fn reference(&self) -> Option<LinearNormal> {
                 match self {
                     Normal::$bare(law) => law.reference(),
                     $(Normal::$variant(law) => law.reference(),)*
                 }
             }
 
-            /// [`NormalModel::max_stiffness`] (N/m).
-            pub fn max_stiffness(&self) -> f64 {
+            /// [`NormalModel::max_stiffness`] (N/m) at reduced radius `r_ij` (m).
+            pub fn max_stiffness(&self, r_ij: f64) -> f64 {
                 match self {
-                    Normal::$bare(law) => law.max_stiffness(),
-                    $(Normal::$variant(law) => law.max_stiffness(),)*
+                    Normal::$bare(law) => law.max_stiffness(r_ij),
+                    $(Normal::$variant(law) => law.max_stiffness(r_ij),)*
                 }
             }
 
-            /// [`NormalModel::contact_time`] (s) for reduced mass `m_ij` (kg).
-            pub fn contact_time(&self, m_ij: f64) -> Option<f64> {
+            /// [`NormalModel::contact_time`] (s) for reduced mass `m_ij` (kg) and reduced
+            /// radius `r_ij` (m).
+            pub fn contact_time(&self, m_ij: f64, r_ij: f64) -> Option<f64> {
                 match self {
-                    Normal::$bare(law) => law.contact_time(m_ij),
-                    $(Normal::$variant(law) => law.contact_time(m_ij),)*
+                    Normal::$bare(law) => NormalModel::contact_time(law, m_ij, r_ij),
+                    $(Normal::$variant(law) => NormalModel::contact_time(law, m_ij, r_ij),)*
                 }
             }
 
             /// [`NormalModel::restitution`] for reduced mass `m_ij` (kg).
             pub fn restitution(&self, m_ij: f64) -> Option<f64> {
                 match self {
-                    Normal::$bare(law) => law.restitution(m_ij),
-                    $(Normal::$variant(law) => law.restitution(m_ij),)*
+                    Normal::$bare(law) => NormalModel::restitution(law, m_ij),
+                    $(Normal::$variant(law) => NormalModel::restitution(law, m_ij),)*
                 }
             }
 
@@ -316,6 +322,8 @@ normal_laws! {
     Linear => LinearNormal;
     /// Luding's elasto-plastic adhesive spring (Luding 2008, Eqs. 6–8).
     Luding => LudingNormal;
+    /// Hertz's elastic force with Tsuji's dashpot (Hertz 1882; Tsuji et al. 1992).
+    Hertz => HertzNormal;
 }
 
 impl Normal {
@@ -323,6 +331,14 @@ impl Normal {
     pub fn linear(&self) -> Option<&LinearNormal> {
         match self {
             Normal::Linear(l) => Some(l),
+            _ => None,
+        }
+    }
+
+    /// Hertz's law's parameters, if the law is Hertz's.
+    pub fn hertz(&self) -> Option<&HertzNormal> {
+        match self {
+            Normal::Hertz(h) => Some(h),
             _ => None,
         }
     }

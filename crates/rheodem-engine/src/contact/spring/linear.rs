@@ -4,7 +4,7 @@
 use super::super::damping::Damping;
 use super::super::kernel::Touch;
 use super::super::lanes::{Real, V3};
-use super::SpringModel;
+use super::{SpringModel, coulomb_cap};
 use glam::DVec3;
 use serde::{Deserialize, Serialize};
 
@@ -127,10 +127,7 @@ impl Resistance {
     ) -> (V3<R>, R::Mask) {
         *xi = *xi + v.scale(R::splat(dt));
         let trial = xi.scale(R::splat(-self.stiffness)) - v.scale(gamma);
-        let limit = R::splat(self.mu_static) * f_rep;
-        let t2 = trial.dot(trial);
-        let slip = t2.gt(limit * limit);
-        let capped = trial.scale(R::splat(self.mu_dynamic) * f_rep / t2.sqrt());
+        let (capped, slip) = coulomb_cap(trial, self.mu_static, self.mu_dynamic, f_rep);
         let reset = if self.stiffness > 0.0 {
             (capped + v.scale(gamma)).scale(R::splat(-1.0 / self.stiffness))
         } else {
@@ -151,6 +148,7 @@ impl SpringModel for Resistance {
         Resistance::is_active(self)
     }
 
+    #[allow(clippy::too_many_arguments)]
     #[inline(always)]
     fn in_plane_lanes<R: Real>(
         &self,
@@ -160,6 +158,7 @@ impl SpringModel for Resistance {
         k: &Touch<R>,
         f_rep: R,
         dt: f64,
+        _state: &mut R,
     ) -> (V3<R>, R::Mask) {
         let gamma = self.damping.in_lanes(k.reduced_mass);
         self.in_plane(xi, n, v, gamma, f_rep, dt)
@@ -198,7 +197,7 @@ impl SpringModel for Resistance {
 /// `1 + x/2 + 3x²/8` (relative error below `x³`, i.e. 1e-12 for `x < 1e-4`) replaces a
 /// square root and a division on the hot path.
 #[inline(always)]
-fn rotate_into_plane<R: Real>(xi: &mut V3<R>, n: V3<R>) {
+pub(super) fn rotate_into_plane<R: Real>(xi: &mut V3<R>, n: V3<R>) {
     let len2 = xi.dot(*xi);
     let c = n.dot(*xi);
     let t = *xi - n.scale(c);

@@ -11,6 +11,8 @@
 //!
 //! Registered laws:
 //! - [`Resistance`]: a linear spring and dashpot capped by a Coulomb limit.
+//! - [`Mindlin`]: Mindlin's spring `8 G* √(R* δ)` of a Hertzian contact, whose contact
+//!   radius at the last step is its per-contact state (sliding friction only).
 //!
 //! Adding a law: write one file beside `linear.rs` with a parameter struct implementing
 //! [`SpringModel`], declare the module below, and add one line to the `spring_laws!`
@@ -18,8 +20,10 @@
 //! parameters and every other law tagged with its variant name.
 
 pub mod linear;
+pub mod mindlin;
 
 pub use linear::Resistance;
+pub use mindlin::Mindlin;
 
 use super::kernel::Touch;
 use super::lanes::{Real, V3};
@@ -37,6 +41,12 @@ pub trait SpringModel: Copy + Debug + PartialEq + Serialize + DeserializeOwned {
     const ALIASES: &'static [&'static str];
     /// One line saying what the law is, with its source.
     const SUMMARY: &'static str;
+    /// Whether the law keeps a per-contact state when it is the sliding spring
+    /// ([`super::ContactHistory::sliding_state`]): one number carried with the contact's
+    /// springs through steps, neighbour rebuilds, images and checkpoints, zero at the first
+    /// touch and reset when the contact opens. The pair loop reads and writes it only for
+    /// such a law.
+    const KEEPS_STATE: bool = false;
 
     /// Whether the spring can ever produce a force (the pair loop skips it otherwise).
     fn is_active(&self) -> bool;
@@ -44,7 +54,10 @@ pub trait SpringModel: Copy + Debug + PartialEq + Serialize + DeserializeOwned {
     /// Advances a spring `xi` (m) that lives in the tangent plane of the contact `k` with
     /// unit normal `n`, driven by the relative velocity `v` (m/s, in the tangent plane) over
     /// `dt` (s), in lanes; returns the force (N) and whether the spring slips. `f_rep ≥ 0`
-    /// (N) is the repulsive normal force that sets the Coulomb limit.
+    /// (N) is the repulsive normal force that sets the Coulomb limit; `state` is the
+    /// contact's state of [`SpringModel::KEEPS_STATE`] (left alone by a law that keeps
+    /// none).
+    #[allow(clippy::too_many_arguments)]
     fn in_plane_lanes<R: Real>(
         &self,
         xi: &mut V3<R>,
@@ -53,10 +66,11 @@ pub trait SpringModel: Copy + Debug + PartialEq + Serialize + DeserializeOwned {
         k: &Touch<R>,
         f_rep: R,
         dt: f64,
+        state: &mut R,
     ) -> (V3<R>, R::Mask);
 
     /// Like [`SpringModel::in_plane_lanes`] for a spring that lives along the normal `n`
-    /// (torsion), `v` along `n`.
+    /// (torsion), `v` along `n`; a torsion spring keeps no state.
     fn along_normal_lanes<R: Real>(
         &self,
         xi: &mut V3<R>,
@@ -73,6 +87,22 @@ pub trait SpringModel: Copy + Debug + PartialEq + Serialize + DeserializeOwned {
 
     /// The same law with its dashpot scaled by `factor` (used to quench a packing).
     fn damping_scaled(&self, factor: f64) -> Self;
+}
+
+/// The Coulomb limit of a spring's trial force `trial` (N, in lanes): returns the force a
+/// slipping contact carries, `μ_d f_rep` along the trial direction, and which lanes slip
+/// (`|trial| > μ_s f_rep`).
+#[inline(always)]
+pub(crate) fn coulomb_cap<R: Real>(
+    trial: V3<R>,
+    mu_static: f64,
+    mu_dynamic: f64,
+    f_rep: R,
+) -> (V3<R>, R::Mask) {
+    let limit = R::splat(mu_static) * f_rep;
+    let t2 = trial.dot(trial);
+    let slip = t2.gt(limit * limit);
+    (trial.scale(R::splat(mu_dynamic) * f_rep / t2.sqrt()), slip)
 }
 
 /// Generates, from one line per law, the enum and the list every part of rheodem takes the
@@ -132,7 +162,17 @@ macro_rules! spring_laws {
                 }
             }
 
+            /// [`SpringModel::KEEPS_STATE`] of the law.
+            #[inline(always)]
+            pub fn keeps_state(&self) -> bool {
+                match self {
+                    Spring::$bare(_) => <$bare_law as SpringModel>::KEEPS_STATE,
+                    $(Spring::$variant(_) => <$law as SpringModel>::KEEPS_STATE,)*
+                }
+            }
+
             /// [`SpringModel::in_plane_lanes`] of the law.
+            #[allow(clippy::too_many_arguments)]
             #[inline(always)]
             pub fn in_plane_lanes<R: Real>(
                 &self,
@@ -142,10 +182,11 @@ macro_rules! spring_laws {
                 k: &Touch<R>,
                 f_rep: R,
                 dt: f64,
+                state: &mut R,
             ) -> (V3<R>, R::Mask) {
                 match self {
-                    Spring::$bare(law) => law.in_plane_lanes(xi, n, v, k, f_rep, dt),
-                    $(Spring::$variant(law) => law.in_plane_lanes(xi, n, v, k, f_rep, dt),)*
+                    Spring::$bare(law) => law.in_plane_lanes(xi, n, v, k, f_rep, dt, state),
+                    $(Spring::$variant(law) => law.in_plane_lanes(xi, n, v, k, f_rep, dt, state),)*
                 }
             }
 
@@ -204,6 +245,8 @@ macro_rules! spring_laws {
 spring_laws! {
     /// The linear spring and dashpot with a Coulomb limit (Shi et al. 2020, Eqs. 5–8).
     Linear => Resistance;
+    /// Mindlin's tangential spring beside Hertz, rescaled as the contact shrinks.
+    Mindlin => Mindlin;
 }
 
 impl Spring {
@@ -214,6 +257,7 @@ impl Spring {
     pub fn linear(&self) -> Option<&Resistance> {
         match self {
             Spring::Linear(r) => Some(r),
+            _ => None,
         }
     }
 }

@@ -18,8 +18,8 @@ const LAW_OPTIONS: &[(&str, &str, f64)] = &[
     ("adhesive_stiffness", "stiffness", 1.0),
 ];
 
-/// The Willett law's values where none is given: the papers' reference bridge
-/// (`γ_s` = 0.020 N/m, `V_b` = 75 nl; Roy et al. 2016).
+/// The liquid bridges' (Willett's and Rabinovich's) values where none is given: the
+/// papers' reference bridge (`γ_s` = 0.020 N/m, `V_b` = 75 nl; Roy et al. 2016).
 const WILLETT_DEFAULTS: &[(&str, f64)] = &[("surface_tension", 0.020), ("volume", 75e-12)];
 
 impl SetUpSchema for SplitBottomSpec {
@@ -40,29 +40,29 @@ impl SetUpSchema for SplitBottomSpec {
         Field::number(
             "surface_tension",
             "N/m",
-            "Surface tension γ_s of the Willett law (liquid_bridge)",
+            "Surface tension γ_s of a liquid bridge (liquid_bridge, rabinovich)",
             Range::Above(0.0),
         )
-        .note(" [default with law liquid_bridge: 0.02]")
+        .note(" [default with a liquid bridge: 0.02]")
         .by_set_up(),
         Field::number(
             "volume_nl",
             "nl = 1e-12 m³",
-            "Bridge volume V_b of the Willett law",
+            "Bridge volume V_b of a liquid bridge",
             Range::AtLeast(0.0),
         )
         .note(
-            " (0: attraction only while touching), with a rupture distance below the mean \
-             diameter [default with law liquid_bridge: 75]",
+            " (0, Willett's only: attraction only while touching), with a rupture distance \
+             below the mean diameter [default with a liquid bridge: 75]",
         )
         .by_set_up(),
         Field::number(
             "contact_angle_deg",
             "degrees",
-            "Contact angle θ of the Willett law",
+            "Contact angle θ of a liquid bridge",
             Range::AtLeast(0.0),
         )
-        .note(", below 90 [default with law liquid_bridge: 20]")
+        .note(", below 90 [default with a liquid bridge: 20]")
         .by_set_up(),
         Field::number(
             "max_force",
@@ -308,7 +308,7 @@ pub(super) fn cohesion(base: LawSpec, values: &Values) -> Result<LawSpec, Scenar
         }
         spec.values.insert(key.to_string(), v * factor);
     }
-    if law == LawKind::LiquidBridge {
+    if matches!(law, LawKind::LiquidBridge | LawKind::Rabinovich) {
         for (key, v) in WILLETT_DEFAULTS {
             spec.values.entry(key.to_string()).or_insert(*v);
         }
@@ -419,7 +419,9 @@ mod tests {
         let e = spec("", &[("surface_tension", Value::Float(0.02))]).expect_err("dry");
         assert!(
             e.contains("`surface_tension` = 0.02: is not a parameter of law none")
-                && e.contains("give law = liquid_bridge or leave surface_tension out"),
+                && e.contains(
+                    "give law = liquid_bridge or law = rabinovich or leave surface_tension out"
+                ),
             "{e}"
         );
         let e = spec(

@@ -431,7 +431,9 @@ impl SplitBottomSpec {
     pub fn groups(&self, g: &Geometry, dt: f64) -> Groups {
         let weight = self.density * PI / 6.0 * self.diameter.powi(3) * self.gravity;
         let surface_tension = match self.cohesion.law {
-            LawKind::LiquidBridge => self.cohesion.value("surface_tension").unwrap_or(0.0),
+            LawKind::LiquidBridge | LawKind::Rabinovich => {
+                self.cohesion.value("surface_tension").unwrap_or(0.0)
+            }
             _ => 0.0,
         };
         let pressure = self.density * SETTLED_FRACTION * self.gravity * 0.5 * g.height;

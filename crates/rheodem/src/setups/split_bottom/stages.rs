@@ -545,13 +545,16 @@ fn time_step(
             .map_err(|e| RunError::Scenario(invalid("stiffness", spec.stiffness, e.to_string())))?,
         TimeStepRule::MeanPair => {
             let m = spec.density * PI / 6.0 * spec.diameter.powi(3);
-            laws.get(0, 0).normal.contact_time(0.5 * m).ok_or_else(|| {
-                RunError::Scenario(invalid(
-                    "damping",
-                    spec.damping,
-                    "overdamps the mean pair: no contact time",
-                ))
-            })?
+            laws.get(0, 0)
+                .normal
+                .contact_time(0.5 * m, 0.25 * spec.diameter)
+                .ok_or_else(|| {
+                    RunError::Scenario(invalid(
+                        "damping",
+                        spec.damping,
+                        "overdamps the mean pair: no contact time",
+                    ))
+                })?
         }
     };
     Ok(t_c / 50.0)
