@@ -11,7 +11,9 @@
 # $RATE_COMMIT, before Willett's contact-only limit (0 nl) existed; every later group uses
 # $COMMIT, and the group `bits` checks that the two give the same bits for a dry run.
 #
-# Resumable: rerun the script (or one group); a finished run only rewrites its outputs.
+# Resumable: rerun the script (or one group); a finished run (its summary.json says
+# "completed") is skipped. The checkpoint of an unfinished long run is committed at the end
+# of a working session (`git add -f …/checkpoint.bin`), so that another machine resumes it.
 # Usage: bash validation/split-bottom-rate.sh GROUP…
 #   settle — the settled state (committed as $V/settled/settled.bin: a new machine never
 #            re-settles)
@@ -89,6 +91,12 @@ settle_seed() {
 run() {
   local b=$1 name=$2 omega=$3 from=$4 to=$5; shift 5
   local duration average_from
+  # A finished run is kept as it is: its checkpoint is not in git, so a new machine would
+  # otherwise run it again from the start.
+  if grep -q '"status": *"completed"' "$V/$name/summary.json" 2>/dev/null; then
+    echo "== $name: finished (its summary says completed)"
+    return
+  fi
   duration=$(echo "$to / $omega" | bc -l)
   average_from=$(echo "$from / $omega" | bc -l)
   echo "== $name (Ω = $omega rad/s, $from–$to rad)"

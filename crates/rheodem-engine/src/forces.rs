@@ -16,6 +16,7 @@
 use crate::contact::kernel::{HistoryLanes, Touch};
 use crate::contact::lanes::{F4, Real, V3};
 use crate::contact::normal::{NormalForce, WithNormal};
+use crate::contact::spring::{SpringModel, WithSpring};
 use crate::contact::{ContactTable, HistoryView, PairForce, PairKernel, PairKinematics};
 use crate::domain::{IDENTITY_IMAGE, IMAGE_COUNT, ImageTransform};
 use crate::integrate::PARTICLES_PER_TASK;
@@ -1145,18 +1146,42 @@ impl<O: ContactObserver, const AVX: bool> WithNormal for Touches<'_, '_, O, AVX>
 
     #[inline(always)]
     fn run<N: NormalForce>(self, normal: &N) {
-        for batch in self.pairs.chunks(LANES) {
-            touch_batch::<O, AVX, N>(
-                self.inp,
-                self.kernel,
-                normal,
-                self.within,
+        let kernel = self.kernel;
+        kernel.tangential().with(TouchesWith {
+            touches: self,
+            normal,
+        });
+    }
+}
+
+/// [`Touches`] with the kernel's normal law as its own type, evaluated with its sliding
+/// spring as its own type ([`WithSpring`]).
+struct TouchesWith<'a, 'h, 'n, O, const AVX: bool, N> {
+    touches: Touches<'a, 'h, O, AVX>,
+    normal: &'n N,
+}
+
+impl<O: ContactObserver, const AVX: bool, N: NormalForce> WithSpring
+    for TouchesWith<'_, '_, '_, O, AVX, N>
+{
+    type Output = ();
+
+    #[inline(always)]
+    fn run<S: SpringModel>(self, sliding: &S) {
+        let t = self.touches;
+        for batch in t.pairs.chunks(LANES) {
+            touch_batch::<O, AVX, N, S>(
+                t.inp,
+                t.kernel,
+                self.normal,
+                sliding,
+                t.within,
                 batch,
-                self.active,
-                self.history,
-                self.force,
-                self.torque,
-                self.obs,
+                t.active,
+                t.history,
+                t.force,
+                t.torque,
+                t.obs,
             );
         }
     }
@@ -1167,10 +1192,11 @@ impl<O: ContactObserver, const AVX: bool> WithNormal for Touches<'_, '_, O, AVX>
 /// the CPU must have) the lane groups are put together in registers.
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
-fn touch_batch<O: ContactObserver, const AVX: bool, N: NormalForce>(
+fn touch_batch<O: ContactObserver, const AVX: bool, N: NormalForce, S: SpringModel>(
     inp: &Inputs<'_>,
     kernel: &PairKernel,
     normal: &N,
+    sliding: &S,
     within: &[Candidate],
     batch: &[u32],
     active: &mut [bool],
@@ -1182,7 +1208,7 @@ fn touch_batch<O: ContactObserver, const AVX: bool, N: NormalForce>(
     let mut springs = HistoryLanes::<F4>::default();
     let (rotation, bridges) = (kernel.resists_rotation(), kernel.needs_bridge());
     let keeps_state = normal.keeps_state();
-    let sliding_state = kernel.sliding_keeps_state();
+    let sliding_state = S::KEEPS_STATE && kernel.sliding_keeps_state();
     let c = lanes_of(within, batch);
     // Lane by lane into rows, then into lane groups.
     let (mut branch, mut velocity, mut omega_i, mut omega_j, mut tangential) = (
@@ -1252,7 +1278,8 @@ fn touch_batch<O: ContactObserver, const AVX: bool, N: NormalForce>(
     pair.normal = pair.normal.scale(one / dist);
     pair.overlap = (pair.radius_i + pair.radius_j) - dist;
     pair.reduced_mass = one / inv_mass;
-    let f = kernel.touching_lanes_with::<F4, false, N>(normal, &pair, &mut springs, inp.dt);
+    let f =
+        kernel.touching_lanes_with::<F4, false, N, S>(normal, sliding, &pair, &mut springs, inp.dt);
     for (l, c) in c.iter().enumerate().take(batch.len()) {
         let (i, j, local) = (c.i as usize, c.j as usize, c.local as usize);
         // SAFETY: `local` is a pair of the chunk's slices (see above).
@@ -1316,9 +1343,9 @@ fn touch_batch<O: ContactObserver, const AVX: bool, N: NormalForce>(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::contact::standard::{bench_adhesion, bench_law};
+    use crate::contact::standard::{bench_adhesion, bench_law, bench_law_with};
     use crate::contact::{Adhesion, ContactHistory, ContactLaw, Damping, LudingNormal, Resistance};
-    use crate::contact::{LawKind, LinearIrreversible};
+    use crate::contact::{LawKind, LinearIrreversible, NormalKind};
     use crate::domain::Domain;
     use crate::particles::{Motion, Sphere};
     use rand::{RngExt, SeedableRng};
@@ -1636,6 +1663,14 @@ mod tests {
         };
         let mut plastic_mixed = ContactTable::uniform(2, plastic(willett));
         plastic_mixed.set(0, 1, law(Adhesion::None, false));
+        // Hertz with Mindlin's spring keeps a state of the sliding spring (the contact
+        // radius): alone with Rabinovich's bridges, and beside the linear law.
+        let hertz = |adhesion| ContactLaw {
+            adhesion,
+            ..bench_law_with(NormalKind::Hertz)
+        };
+        let mut hertz_mixed = ContactTable::uniform(2, hertz(Adhesion::None));
+        hertz_mixed.set(0, 1, law(willett, false));
         let tables = [
             (
                 "frictional",
@@ -1653,6 +1688,11 @@ mod tests {
             ("mixed", mixed),
             ("Luding", ContactTable::uniform(1, plastic(Adhesion::None))),
             ("Luding mixed", plastic_mixed),
+            (
+                "Hertz-Mindlin, Rabinovich",
+                ContactTable::uniform(1, hertz(bench_adhesion(LawKind::Rabinovich))),
+            ),
+            ("Hertz-Mindlin mixed", hertz_mixed),
         ];
         let dt = 1e-4;
         let images = Domain::new(DVec3::ZERO, DVec3::splat(6.0), [true; 3]).image_transforms();
@@ -1727,13 +1767,15 @@ mod tests {
                                 got.active[k],
                                 bits(&[a.tangential, a.rolling, a.torsion]),
                                 a.bridge,
-                                a.state.to_bits()
+                                a.state.to_bits(),
+                                a.sliding_state.to_bits()
                             ),
                             (
                                 plain.active[k],
                                 bits(&[b.tangential, b.rolling, b.torsion]),
                                 b.bridge,
-                                b.state.to_bits()
+                                b.state.to_bits(),
+                                b.sliding_state.to_bits()
                             ),
                             "{name}, {threads} threads, round {round}, pair {k}: plain copy"
                         );
@@ -1770,6 +1812,15 @@ mod tests {
                         .filter(|h| h.state > 0.0)
                         .count();
                     assert!(kept > 0, "{name}: contacts keep their largest overlap");
+                }
+                if laws.kernel(0, 0).sliding_keeps_state() {
+                    let kept = list
+                        .slices()
+                        .history
+                        .iter()
+                        .filter(|h| h.sliding_state > 0.0)
+                        .count();
+                    assert!(kept > 0, "{name}: contacts keep their radius");
                 }
                 if laws.forms_bridges() {
                     assert!(bridges_apart > 0, "{name}: some bridges hold pairs apart");

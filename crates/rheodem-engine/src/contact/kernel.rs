@@ -11,7 +11,7 @@
 use super::adhesion::ResolvedAdhesion;
 use super::lanes::{Real, V3};
 use super::normal::{NormalForce, ResolvedNormal};
-use super::spring::Spring;
+use super::spring::{Sliding, Spring};
 use super::{ContactHistory, ContactLaw, PairForce, PairKinematics};
 
 /// A species pair's contact law with every per-run constant resolved (see the module
@@ -222,7 +222,13 @@ impl PairKernel {
         springs: &mut HistoryLanes<R>,
         dt: f64,
     ) -> TouchForce<R> {
-        self.touching_lanes_with::<R, WALL, _>(&self.normal, k, springs, dt)
+        self.touching_lanes_with::<R, WALL, _, _>(&self.normal, &self.tangential, k, springs, dt)
+    }
+
+    /// The kernel's sliding spring (for [`Spring::with`]).
+    #[inline(always)]
+    pub fn tangential(&self) -> &Spring {
+        &self.tangential
     }
 
     /// The kernel's normal law, resolved (for [`ResolvedNormal::with`]).
@@ -231,12 +237,14 @@ impl PairKernel {
         &self.normal
     }
 
-    /// [`PairKernel::touching_lanes`] with the kernel's normal law given as `normal`, its
-    /// own type, so that the caller's code is compiled for that law alone.
+    /// [`PairKernel::touching_lanes`] with the kernel's normal law given as `normal` and its
+    /// sliding spring as `sliding`, each its own type, so that the caller's code is compiled
+    /// for those laws alone.
     #[inline(always)]
-    pub fn touching_lanes_with<R: Real, const WALL: bool, N: NormalForce>(
+    pub fn touching_lanes_with<R: Real, const WALL: bool, N: NormalForce, T: Sliding>(
         &self,
         normal: &N,
+        sliding: &T,
         k: &Touch<R>,
         springs: &mut HistoryLanes<R>,
         dt: f64,
@@ -274,7 +282,7 @@ impl PairKernel {
             };
             let v_contact = k.velocity - spin.cross(n);
             let v_t = v_contact - n.scale(n.dot(v_contact));
-            let (f_t, slip) = self.tangential.in_plane_lanes(
+            let (f_t, slip) = sliding.slide(
                 &mut springs.tangential,
                 n,
                 v_t,
