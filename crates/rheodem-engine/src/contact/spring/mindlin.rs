@@ -26,7 +26,7 @@ use serde::{Deserialize, Serialize};
 /// use rheodem_engine::contact::spring::Mindlin;
 ///
 /// let law = Mindlin { effective_shear_modulus: 1.0e9, dashpot: 0.0, mu_static: 0.5, mu_dynamic: 0.5 };
-/// let (r_ij, overlap) = (1.0e-3, 1.0e-6);
+/// let (r_ij, overlap): (f64, f64) = (1.0e-3, 1.0e-6);
 /// let a = (r_ij * overlap).sqrt();
 /// let mut xi = DVec3::ZERO;
 /// let mut a_prev = 0.0;
