@@ -31,7 +31,7 @@ use serde::{Deserialize, Serialize};
 /// let mut xi = DVec3::ZERO;
 /// let mut a_prev = 0.0;
 /// // 0.1 µm of sliding in one step, well below the Coulomb limit of 1 N.
-/// let f = law.slide(&mut xi, &mut a_prev, DVec3::Z, DVec3::X, r_ij, overlap, 1.0e-6, 1.0, 0.1);
+/// let f = law.slide(&mut xi, &mut a_prev, DVec3::Z, DVec3::X * 1.0e-6, r_ij, overlap, 1.0e-6, 1.0, 0.1);
 /// assert!((f.x + 8.0e9 * a * 1.0e-7).abs() < 1e-9);
 /// assert_eq!(a_prev, a);
 /// ```
