@@ -21,7 +21,15 @@ from ._rheodem import (
 )
 from .fields import Fields, fields
 from .results import import_results, results
-from .runs import Estimate, SetUpResult, run_scenario, run_setup, shear_box, split_bottom
+from .runs import (
+    Estimate,
+    SetUpResult,
+    chute,
+    run_scenario,
+    run_setup,
+    shear_box,
+    split_bottom,
+)
 
 __all__ = [
     "COMMIT",
@@ -33,6 +41,7 @@ __all__ = [
     "SetUpResult",
     "Simulation",
     "__version__",
+    "chute",
     "fields",
     "import_results",
     "predict",

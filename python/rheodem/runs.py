@@ -66,6 +66,8 @@ class SetUpResult:
         state = self.summary.get("steady_state")
         if isinstance(state, dict) and "steady" in state:
             return bool(state["steady"])
+        if isinstance(self.summary.get("steady"), bool):
+            return bool(self.summary["steady"])
         return None
 
 
@@ -119,6 +121,16 @@ def split_bottom(out: Optional[PathLike] = None, **params: Any) -> SetUpResult:
     other keys of ``rheodem.setups()``; ``from_run`` starts from a settled run. See
     ``run_setup``."""
     return run_setup("split-bottom", out, **params)
+
+
+def chute(out: Optional[PathLike] = None, **params: Any) -> SetUpResult:
+    """Inclined chute flow on a rough base (``rheodem chute``): inclination
+    ``angle_deg``, layer ``height`` in mean diameters, ``mu_p``, the adhesive law and its
+    parameters, the averaging window and the other keys of ``rheodem.setups()``; the depth
+    profiles are ``result.summary["results"]["profiles"]`` and the bulk values
+    ``result.summary["results"]["bulk"]``; ``from_run`` tilts the settled layer of an
+    earlier chute run. See ``run_setup``."""
+    return run_setup("chute", out, **params)
 
 
 def run_scenario(

@@ -4,6 +4,7 @@ resumption, errors that name the key, Ctrl-C, and the fitted laws."""
 from __future__ import annotations
 
 import json
+import math
 import os
 import signal
 import subprocess
@@ -59,6 +60,30 @@ def test_the_split_bottom_cell_reproduces_its_archived_run(tmp_path):
     assert any("settle_max_time" in w for w in r.warnings)
 
 
+# A small layer at rest at 10°, then the same grains tilted to 30° (tests/chute.rs holds
+# the same layer to its closed forms).
+CHUTE = dict(
+    angle_deg=10.0, height=6.0, length=6.0, width=6.0, duration=0.1, average_from=0.04,
+    bulk_margin=1.5, rows=20, snapshots=0, checkpoints=2, cg_every=0.004,
+)
+
+
+def test_the_chute_runs_from_python_and_tilts_its_settled_layer(tmp_path):
+    rest = rheodem.chute(tmp_path / "rest", threads=1, **CHUTE)
+    assert rest.summary["status"] == "completed" and rest.steady
+    bulk = rest.estimates["results.bulk.friction"]
+    tan = math.tan(math.radians(10.0))
+    assert abs(bulk.mean / tan - 1.0) < 0.02 and bulk.error > 0
+    profiles = rest.summary["results"]["profiles"]
+    assert {"z", "volume_fraction", "friction", "inertial_number"} <= profiles[0].keys()
+    steep = rheodem.chute(
+        tmp_path / "steep", threads=1, from_run=tmp_path / "rest",
+        **dict(CHUTE, angle_deg=30.0, duration=0.05, average_from=0.02),
+    )
+    assert steep.summary["from"] == str(tmp_path / "rest")
+    assert steep.summary["free_particles"] == rest.summary["free_particles"]
+
+
 def test_set_up_errors_name_the_key(tmp_path):
     with pytest.raises(rheodem.ScenarioError) as e:
         rheodem.shear_box(tmp_path / "a", mu_p=0.5, inertial=3.0, softness=0.01)
@@ -68,10 +93,10 @@ def test_set_up_errors_name_the_key(tmp_path):
     with pytest.raises(rheodem.ScenarioError, match="must be a number"):
         rheodem.shear_box(tmp_path / "c", mu_p="high", inertial=0.1, softness=0.01)
     with pytest.raises(rheodem.ScenarioError, match="not a set-up"):
-        rheodem.run_setup("chute", tmp_path / "d")
+        rheodem.run_setup("hopper", tmp_path / "d")
     assert not (tmp_path / "a").exists()
     names = [s["name"] for s in rheodem.setups()]
-    assert names[:2] == ["shear-box", "split-bottom"]
+    assert names[:3] == ["shear-box", "split-bottom", "chute"]
     keys = {f["key"]: f for f in rheodem.setups()[0]["parameters"]}
     assert keys["inertial"]["required"] and keys["stiffness"]["unit"] == "N/m"
 

@@ -652,10 +652,56 @@ pub fn surface_height(
             .and_modify(|t| *t = t.max(top))
             .or_insert(top);
     }
-    if tops.is_empty() {
+    mean_top(&tops)
+}
+
+/// Height (m) of the free surface of the particles `i` with `include(i)` in a box periodic
+/// along `x` and `y`, lower corner `lo` and edges `lengths` (m), measured as
+/// [`surface_height`] measures it in an annulus: the box is divided into `n_x × n_y`
+/// columns of about `column × column` (m², `n = max(1, round(L / column))` per axis, particle
+/// positions wrapped into the box), the top `z + a` of the highest particle of each column
+/// is taken, and the surface height is the mean of these tops over the columns that hold a
+/// particle.
+///
+/// `None` when no particle qualifies, when `positions` and `radii` differ in length, or when
+/// the lengths or the column are not positive and finite.
+pub fn surface_height_box(
+    positions: &[DVec3],
+    radii: &[f64],
+    include: impl Fn(usize) -> bool,
+    lo: DVec3,
+    lengths: DVec3,
+    column: f64,
+) -> Option<f64> {
+    if positions.len() != radii.len()
+        || ![lengths.x, lengths.y, column]
+            .iter()
+            .all(|v| v.is_finite() && *v > 0.0)
+    {
         return None;
     }
-    Some(tops.values().sum::<f64>() / tops.len() as f64)
+    let n = |l: f64| (l / column).round().max(1.0);
+    let (nx, ny) = (n(lengths.x), n(lengths.y));
+    let bin = |x: f64, lo: f64, l: f64, n: f64| {
+        (((x - lo).rem_euclid(l) / l * n) as usize).min(n as usize - 1)
+    };
+    let mut tops: FxHashMap<(usize, usize), f64> = FxHashMap::default();
+    for (i, (p, &a)) in positions.iter().zip(radii).enumerate() {
+        if !include(i) || !p.is_finite() || !a.is_finite() {
+            continue;
+        }
+        let key = (bin(p.x, lo.x, lengths.x, nx), bin(p.y, lo.y, lengths.y, ny));
+        let top = p.z + a;
+        tops.entry(key)
+            .and_modify(|t| *t = t.max(top))
+            .or_insert(top);
+    }
+    mean_top(&tops)
+}
+
+/// The mean of the columns' tops (m); `None` without a column.
+fn mean_top(tops: &FxHashMap<(usize, usize), f64>) -> Option<f64> {
+    (!tops.is_empty()).then(|| tops.values().sum::<f64>() / tops.len() as f64)
 }
 
 #[cfg(test)]

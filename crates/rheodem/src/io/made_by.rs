@@ -18,6 +18,8 @@ pub enum Maker {
     ShearBox,
     /// A split-bottom cell (`rheodem split-bottom` or a split-bottom study).
     SplitBottom,
+    /// A chute (`rheodem chute` or a chute study).
+    Chute,
 }
 
 impl Maker {
@@ -27,6 +29,7 @@ impl Maker {
             Maker::Run => "run",
             Maker::ShearBox => "shear-box",
             Maker::SplitBottom => "split-bottom",
+            Maker::Chute => "chute",
         }
     }
 
@@ -43,13 +46,22 @@ impl Maker {
                 "continue it with the same `rheodem split-bottom … --out {d}` (or the study \
                  that made it)"
             ),
+            Maker::Chute => format!(
+                "continue it with the same `rheodem chute … --out {d}` (or the study that made \
+                 it)"
+            ),
         }
     }
 
     fn from_name(name: &str) -> Option<Maker> {
-        [Maker::Run, Maker::ShearBox, Maker::SplitBottom]
-            .into_iter()
-            .find(|m| m.name() == name)
+        [
+            Maker::Run,
+            Maker::ShearBox,
+            Maker::SplitBottom,
+            Maker::Chute,
+        ]
+        .into_iter()
+        .find(|m| m.name() == name)
     }
 }
 
@@ -66,7 +78,9 @@ pub fn read(dir: &Path) -> Option<Maker> {
         return Maker::from_name(text.trim());
     }
     let has = |f: &str| dir.join(f).exists();
-    if has("split-bottom.toml") {
+    if has("chute.toml") {
+        Some(Maker::Chute)
+    } else if has("split-bottom.toml") {
         Some(Maker::SplitBottom)
     } else if has("point.json") {
         Some(Maker::ShearBox)

@@ -1,9 +1,11 @@
 //! Builders of the standard set-ups.
 
 pub mod archive;
+pub mod chute;
 pub mod cohesion_figures;
 pub mod compare;
 pub mod law_fits;
+pub mod law_options;
 pub mod phase_diagram;
 pub mod point_result;
 pub mod regimes;

@@ -3,6 +3,7 @@
 //! subcommand per set-up through `run`) reads this list; a set-up's parameters are
 //! declared once, by its [`SetUpSchema`], and it runs as an [`Experiment`].
 
+use super::chute::ChuteSpec;
 use super::runner::{Event, Experiment, Finished, RunOptions};
 use super::schema::{Field, SetUpSchema, Values, markdown};
 use super::shear_box::ShearBoxSpec;
@@ -74,7 +75,11 @@ const fn info<S: Studied>() -> SetUpInfo {
 }
 
 /// Every registered set-up.
-pub const SETUPS: &[SetUpInfo] = &[info::<ShearBoxSpec>(), info::<SplitBottomSpec>()];
+pub const SETUPS: &[SetUpInfo] = &[
+    info::<ShearBoxSpec>(),
+    info::<SplitBottomSpec>(),
+    info::<ChuteSpec>(),
+];
 
 /// The set-up named `name`; an error lists the known names.
 pub fn find(name: &str) -> Result<&'static SetUpInfo, String> {
@@ -159,12 +164,13 @@ mod tests {
                     let mut values = required.clone();
                     values.push((f.key, toml::Value::String(name.to_string())));
                     if let Err(e) = (s.accepts)(toml::Table::new(), &values) {
-                        // Only the split-bottom cell's linear laws, which have no default
-                        // strength there, are refused, and by what they need.
+                        // Only the linear laws of the set-ups that take the adhesive law's
+                        // parameters as given (no default strength there) are refused, and
+                        // by what they need.
                         let e = e.to_string();
                         assert!(
                             f.kind == Kind::AdhesiveLaw
-                                && s.name == "split-bottom"
+                                && ["split-bottom", "chute"].contains(&s.name)
                                 && ["reversible", "linear_irreversible"].contains(&name)
                                 && e.contains("needs max_force and adhesive_stiffness"),
                             "{}: `{}` = {name}: {e}",
@@ -176,9 +182,9 @@ mod tests {
             }
         }
         assert!(
-            find("chute")
+            find("hopper")
                 .expect_err("no such set-up")
-                .contains("shear-box, split-bottom")
+                .contains("shear-box, split-bottom, chute")
         );
     }
 
@@ -205,10 +211,10 @@ mod tests {
                 .unwrap_or_else(|e| panic!("{}: its point is refused: {e}", s.name));
         }
         let study =
-            StudySpec::from_toml("title = \"t\"\nsetup = \"chute\"\nout = \"o\"").expect("parsed");
-        let e = study_points(&study, false).expect_err("no chute yet");
+            StudySpec::from_toml("title = \"t\"\nsetup = \"hopper\"\nout = \"o\"").expect("parsed");
+        let e = study_points(&study, false).expect_err("no hopper");
         assert!(
-            e.to_string().contains("`setup` = chute") && e.to_string().contains("shear-box"),
+            e.to_string().contains("`setup` = hopper") && e.to_string().contains("chute"),
             "{e}"
         );
     }

@@ -17,42 +17,16 @@
 
 use super::split_bottom::{SplitBottomSpec, Stage};
 use super::sweep::{PointStatus, point_tables};
-use crate::contact::LawKind;
 use crate::io::atomic::write_atomic;
 use crate::run::{RunError, io_err};
 use crate::scenario::ScenarioError;
+use crate::setups::law_options::law_name;
 use std::path::{Path, PathBuf};
 
 /// The name of a point's directory, from its controls: the law and its parameters, `Ω`,
 /// `g` and the seed (`willett-g0.02-v75-omega0.5-g9.81-s1`; volumes in nl).
 pub fn point_name(spec: &SplitBottomSpec) -> String {
-    let c = &spec.cohesion;
-    let value = |key: &str| c.value(key).unwrap_or(f64::NAN);
-    let law = match c.law {
-        LawKind::None => "dry".to_string(),
-        LawKind::LiquidBridge => {
-            let angle = value("contact_angle_deg");
-            let angle = if angle == 20.0 {
-                String::new()
-            } else {
-                format!("-theta{angle}")
-            };
-            format!(
-                "willett-g{}-v{}{angle}",
-                value("surface_tension"),
-                (value("volume") * 1e12 * 1e6).round() / 1e6
-            )
-        }
-        LawKind::LinearIrreversible if c.value("stiffness").is_some() => {
-            format!("linear-f{:e}-k{}", value("max_force"), value("stiffness"))
-        }
-        // Any other law (or a linear one given by its range): its name and its values in
-        // key order.
-        other => std::iter::once(other.name().replace('_', "-"))
-            .chain(c.values.iter().map(|(k, v)| format!("{k}{v}")))
-            .collect::<Vec<_>>()
-            .join("-"),
-    };
+    let law = law_name(&spec.cohesion);
     format!("{law}-omega{}-g{}-s{}", spec.omega, spec.gravity, spec.seed)
 }
 
@@ -145,6 +119,7 @@ pub fn archive_point(archive: &Path, name: &str, summary: &Path) -> Result<(), R
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::contact::LawKind;
 
     /// A grid over dotted cohesion keys gives one named point per combination; a second
     /// point with the same controls is refused; a bad value names the point.

@@ -223,7 +223,7 @@ impl SplitBottomSpec {
             .map_err(|e| ScenarioError::Parse(format!("key `{}`: {}", e.path(), e.inner())))?;
         // The law's defaults written out as for a config file (a Willett table without
         // its contact angle or volume), so that a study point and a config agree.
-        spec.cohesion = super::schema::cohesion(spec.cohesion, &Vec::new())?;
+        spec.cohesion = crate::setups::law_options::cohesion(spec.cohesion, &Vec::new())?;
         Ok(spec)
     }
 
