@@ -1,12 +1,17 @@
 #!/usr/bin/env bash
-# benches/peers/run.sh — LAMMPS vs rheodem on the standard throughput problem.
+# benches/peers/run.sh — LAMMPS vs rheodem on the throughput problems.
 #
 # PROBLEM selects the contact law of the problem (the same spheres, shear and steps):
 #   shear        Hooke + tangential history (default): LAMMPS `gran/hooke/history`
 #                (benches/peers/lammps-in.shear), rheodem `bench`;
 #   shear-hertz  Hertz–Mindlin with Tsuji's damping: LAMMPS `pair_style granular`
 #                `hertz/material … tangential mindlin … damping tsuji`
-#                (benches/peers/lammps-in.shear-hertz), rheodem `bench --normal hertz`.
+#                (benches/peers/lammps-in.shear-hertz), rheodem `bench --normal hertz`;
+#   chute        LAMMPS's own granular benchmark (bench/in.chute): 32 000 spheres flowing
+#                on a frozen rough base, gravity at 26° (benches/peers/lammps-in.chute),
+#                rheodem `bench --problem chute`. Its data file is not made from the packing:
+#                `rheodem bench --problem chute --write-lammps-data` prepares the state once
+#                (a stack fallen for 30 000 steps) and both codes start from that file.
 #
 # Runs, in one go and on the same machine:
 #   * LAMMPS (Debian package, `pair_style gran/hooke/history`) on the input
@@ -62,7 +67,9 @@ PROBLEM=${PROBLEM:-shear}
 case $PROBLEM in
     shear) RHEODEM_LAW=""; LAMMPS_STYLE="gran/hooke/history" ;;
     shear-hertz) RHEODEM_LAW="--normal hertz"; LAMMPS_STYLE="granular hertz/material, mindlin, tsuji" ;;
-    *) printf '[peers] ERROR: PROBLEM must be shear or shear-hertz (got %s)\n' "$PROBLEM" >&2; exit 1 ;;
+    # The data file's path is only known below; rheodem_cmd appends it.
+    chute) RHEODEM_LAW="--problem chute"; LAMMPS_STYLE="gran/hooke/history (chute)" ;;
+    *) printf '[peers] ERROR: PROBLEM must be shear, shear-hertz or chute (got %s)\n' "$PROBLEM" >&2; exit 1 ;;
 esac
 LAMMPS_INPUT=${LAMMPS_INPUT:-"$SCRIPT_DIR/lammps-in.$PROBLEM"}
 PYTHON=${PYTHON:-python3}
@@ -102,11 +109,12 @@ trap cleanup EXIT
 
 # The LAMMPS data file, written once per run from the packing (atom_style sphere, zero-tilt
 # triclinic box); lammps_data.py says what is wrong if the packing is missing or malformed.
-if [[ "$SKIP_LAMMPS" != 1 ]]; then
+# (The chute's data file is written by rheodem once it is built, below.)
+if [[ "$SKIP_LAMMPS" != 1 && "$PROBLEM" != chute ]]; then
     "$PYTHON" "$SCRIPT_DIR/lammps_data.py" "$PACKING" "$TMP/bench.data" \
         || die "could not write the LAMMPS data file from $PACKING (see above)"
-    cp "$LAMMPS_INPUT" "$TMP/lammps-in.shear"
 fi
+[[ "$SKIP_LAMMPS" == 1 ]] || cp "$LAMMPS_INPUT" "$TMP/lammps-in"
 
 # ---------------------------------------------------------------------------------------
 # Small numeric helpers (awk does the floating point)
@@ -198,6 +206,14 @@ if [[ "$SKIP_RHEODEM" != 1 ]]; then
     fi
     [[ "$RHEODEM_OK" == 1 ]] || log "rheodem skipped: $RHEODEM_WHY"
 fi
+# The chute's state, prepared once by rheodem (on 2 threads) for both codes.
+if [[ "$PROBLEM" == chute ]]; then
+    log "preparing the chute's state (rheodem bench --problem chute --write-lammps-data)…"
+    (cd "$REPO_ROOT" && cargo run --release -q -p rheodem-cli -- bench --problem chute \
+        --threads 2 --write-lammps-data "$TMP/bench.data") >&2 \
+        || die "could not write the chute's LAMMPS data file (see above)"
+    RHEODEM_LAW="--problem chute --lammps-data $TMP/bench.data"
+fi
 
 # ---------------------------------------------------------------------------------------
 # One run of each kind. Each prints the throughput (particle-steps/s) on stdout, or
@@ -206,7 +222,7 @@ fi
 # lammps_cmd N: the command line for N ranks (1 rank: plain binary, as in the README)
 lammps_cmd() {
     local n=$1
-    local args=(-in lammps-in.shear -var nwarm "$NWARM" -var nrun "$NRUN")
+    local args=(-in lammps-in -var nwarm "$NWARM" -var nrun "$NRUN")
     if ((n == 1)); then
         echo "$LMP_BIN ${args[*]}"
     else
@@ -218,7 +234,7 @@ lammps_cmd() {
 run_lammps() {
     local n=$1 rep=$2 dir="$TMP/lammps-np$1-rep$2" line x procs steps atoms
     mkdir -p "$dir"
-    cp "$TMP/bench.data" "$TMP/lammps-in.shear" "$dir/"
+    cp "$TMP/bench.data" "$TMP/lammps-in" "$dir/"
     # shellcheck disable=SC2046,SC2091  # the command string is split and run on purpose
     if ! (cd "$dir" && $(lammps_cmd "$n")) >"$dir/stdout.txt" 2>&1; then
         log "LAMMPS np=$n rep=$rep failed; last lines:"; tail -n 15 "$dir/stdout.txt" >&2
@@ -237,7 +253,9 @@ run_lammps() {
     awk -v a="$atoms" -v s="$steps" -v t="$x" 'BEGIN { printf "%.6g\n", a*s/t }'
 }
 
-rheodem_cmd() { echo "cargo run --release -p rheodem-cli -- bench --threads $1 $RHEODEM_LAW"; }
+rheodem_cmd() {
+    echo "cargo run --release -p rheodem-cli -- bench --threads $1 --warmup $NWARM --steps $NRUN $RHEODEM_LAW"
+}
 
 # run_rheodem N REP
 run_rheodem() {
@@ -282,10 +300,10 @@ LOAD_AFTER=$(cut -d' ' -f1-3 /proc/loadavg)
 # (c_pp = pair part of the pressure, c_pp[4] = pxy, so shear stress = -pxy; c_z = contacts/atom).
 STEADY=""
 if compgen -G "$TMP/lammps-np*-rep*/stdout.txt" >/dev/null; then
-    STEADY=$(awk -v nwarm="$NWARM" '
+    STEADY=$(awk -v nwarm="$NWARM" -v problem="$PROBLEM" '
         FNR == 1 { block = 0 }
         /^Step / { block++; next }
-        block >= 2 && $1 ~ /^[0-9]+$/ && NF == 7 && $1 > nwarm {
+        block >= 2 && $1 ~ /^[0-9]+$/ && NF == 7 && $1 > nwarm && problem != "chute" {
             n++; p += $4; s += -$5; z += $7 }
         END { if (n) printf "pressure %.1f, shear stress %.1f, contacts/particle %.2f (mean of %d thermo rows)", p/n, s/n, z/n, n }
         ' "$TMP"/lammps-np*-rep*/stdout.txt)
@@ -305,7 +323,7 @@ fi
 RHEODEM_REV=$(git -C "$REPO_ROOT" describe --always --dirty 2>/dev/null || echo unknown)
 
 echo
-echo "### Standard throughput problem ($PROBLEM): rheodem vs LAMMPS"
+echo "### Throughput problem $PROBLEM: rheodem vs LAMMPS"
 echo
 echo "- date: $(date -u '+%Y-%m-%d %H:%M UTC')"
 echo "- machine: $(env -u OMP_NUM_THREADS -u OMP_THREAD_LIMIT nproc) logical CPUs (nproc), $CPU_MODEL"
@@ -314,7 +332,11 @@ echo "- load average (1/5/15 min) before: $LOAD_BEFORE, after: $LOAD_AFTER"
 if awk -v l="${LOAD_BEFORE%% *}" 'BEGIN { exit !(l > 0.5) }'; then
     echo "- **warning: the machine was not idle (1-min load ${LOAD_BEFORE%% *} > 0.5); the 2-rank/2-thread figures are unreliable**"
 fi
-echo "- problem: $PACKING_SHOWN (4096 spheres, phi 0.62, Lees-Edwards shear); $NWARM warm-up + $NRUN timed steps"
+if [[ "$PROBLEM" == chute ]]; then
+    echo "- problem: LAMMPS's chute (32 800 spheres with the base, state written by rheodem bench --problem chute --write-lammps-data); $NWARM warm-up + $NRUN timed steps"
+else
+    echo "- problem: $PACKING_SHOWN (4096 spheres, phi 0.62, Lees-Edwards shear); $NWARM warm-up + $NRUN timed steps"
+fi
 echo "- repetitions: $REPEATS per configuration, interleaved; table shows the median"
 if [[ -n "$LMP_VERSION" ]]; then
     echo "- LAMMPS: $LMP_VERSION; MPI launcher: ${MPI_CMD[*]:-none}; OMP_NUM_THREADS=1"
@@ -373,8 +395,12 @@ echo
 echo '```sh'
 echo "export OMP_NUM_THREADS=1"
 if [[ "$SKIP_LAMMPS" != 1 ]]; then
-    echo "python3 benches/peers/lammps_data.py $PACKING_SHOWN D/bench.data"
-    echo "cp $LAMMPS_INPUT_SHOWN D/lammps-in.shear && cd D"
+    if [[ "$PROBLEM" == chute ]]; then
+        echo "cargo run --release -p rheodem-cli -- bench --problem chute --threads 2 --write-lammps-data D/bench.data"
+    else
+        echo "python3 benches/peers/lammps_data.py $PACKING_SHOWN D/bench.data"
+    fi
+    echo "cp $LAMMPS_INPUT_SHOWN D/lammps-in && cd D"
     for n in "${COUNTS[@]}"; do
         if ((n == 1)) || ((${#MPI_CMD[@]} > 0)); then lammps_cmd "$n"; fi
     done

@@ -17,9 +17,23 @@ pub struct BenchArgs {
     /// Timed steps.
     #[arg(long, default_value_t = 3000)]
     pub steps: u64,
-    /// Verlet skin (model units; the LAMMPS input uses 0.2).
-    #[arg(long, default_value_t = rheodem::bench::DEFAULT_SKIN)]
-    pub skin: f64,
+    /// The problem: `shear` (the standard problem) or `chute` (LAMMPS's chute benchmark,
+    /// bench/in.chute; linear frictional law only).
+    #[arg(long, default_value = "shear", value_parser = ["shear", "chute"])]
+    pub problem: String,
+    /// With `--problem chute`: prepare the state the benchmark times (the stack fallen for
+    /// 30 000 steps), write it as a LAMMPS data file (atom_style sphere) to this path and
+    /// exit.
+    #[arg(long, value_name = "FILE")]
+    pub write_lammps_data: Option<std::path::PathBuf>,
+    /// With `--problem chute`: start from this LAMMPS data file (one written by
+    /// `--write-lammps-data`) instead of preparing the state anew.
+    #[arg(long, value_name = "FILE")]
+    pub lammps_data: Option<std::path::PathBuf>,
+    /// Verlet skin (model units; default: 0.2 for the standard problem as in its LAMMPS
+    /// input, 0.1 for the chute as in LAMMPS's).
+    #[arg(long)]
+    pub skin: Option<f64>,
     /// Also hold σ_yy at 185 (the LAMMPS steady pressure) by rescaling L_y.
     #[arg(long)]
     pub stress_control: bool,
@@ -42,11 +56,20 @@ pub fn run(args: BenchArgs) -> Result<()> {
         threads,
         warmup,
         steps,
+        problem,
+        write_lammps_data,
+        lammps_data,
         skin,
         stress_control,
         cohesion,
         normal,
     } = args;
+    let chute = problem == "chute";
+    let skin = skin.unwrap_or(if chute {
+        rheodem::bench::chute::SKIN
+    } else {
+        rheodem::bench::DEFAULT_SKIN
+    });
     if !(skin.is_finite() && skin > 0.0) {
         bail!("--skin = {skin}: must be a positive number");
     }
@@ -56,6 +79,24 @@ pub fn run(args: BenchArgs) -> Result<()> {
     } else {
         threads
     };
+    if chute {
+        if stress_control || !cohesion.is_empty() || normal != NormalKind::Linear {
+            bail!(
+                "--problem chute runs LAMMPS's chute law only (Hooke with tangential history): \
+                 leave out --stress-control, --cohesion and --normal"
+            );
+        }
+        return match write_lammps_data {
+            Some(path) => write_chute(counts[0], &path),
+            None => run_chute(&counts, warmup, steps, skin, lammps_data.as_deref()),
+        };
+    }
+    if write_lammps_data.is_some() || lammps_data.is_some() {
+        bail!(
+            "--write-lammps-data and --lammps-data are for --problem chute (the standard \
+             problem's data file comes from benches/peers/lammps_data.py)"
+        );
+    }
     let variants = if cohesion.is_empty() {
         vec![LawKind::None, LawKind::Reversible, LawKind::LiquidBridge]
     } else {
@@ -80,28 +121,84 @@ pub fn run(args: BenchArgs) -> Result<()> {
                 }
                 rheodem::bench::run_timed(&mut sim, warmup, steps)
             });
-            let total = r.loop_time.as_secs_f64();
-            let pct = |d: std::time::Duration| 100.0 * d.as_secs_f64() / total;
-            println!(
-                "{name}, threads {n}: {} particles × {} steps in {:.3} s — neighbours {:.1} % (rebuilds {:.1} %: {}, {:.1} pairs/particle), forces {:.1} %, integration {:.1} %; P = {:.1}, Z = {:.2}",
-                r.particles,
-                r.steps,
-                total,
-                pct(r.neighbor_time),
-                pct(r.rebuild_time),
-                r.rebuilds,
-                r.pairs_per_particle,
-                pct(r.force_time),
-                pct(r.integrate_time),
-                r.pressure,
-                r.coordination
-            );
-            println!(
-                "throughput: {:.0} particle-steps/s ({:.2} M, {name}, threads {n})",
-                r.particle_steps_per_second(),
-                r.particle_steps_per_second() / 1e6
-            );
+            print_report(&name, n, &r);
         }
     }
     Ok(())
+}
+
+/// Prepares the chute's state on `threads` threads and writes it as a LAMMPS data file.
+fn write_chute(threads: usize, path: &std::path::Path) -> Result<()> {
+    use rheodem::bench::chute;
+    let (pool, _) = pool(Some(threads))?;
+    let sim = pool.install(chute::chute_problem);
+    std::fs::write(path, chute::lammps_data(&sim))
+        .map_err(|e| anyhow::anyhow!("cannot write {}: {e}", path.display()))?;
+    println!(
+        "wrote {} ({} atoms, {} steps after the stack)",
+        path.display(),
+        sim.particles.len(),
+        sim.step
+    );
+    Ok(())
+}
+
+/// LAMMPS's chute benchmark on each thread count, from the data file `data` or prepared
+/// anew.
+fn run_chute(
+    counts: &[usize],
+    warmup: u64,
+    steps: u64,
+    skin: f64,
+    data: Option<&std::path::Path>,
+) -> Result<()> {
+    use rheodem::bench::chute;
+    let text = match data {
+        Some(path) => Some((
+            path.display().to_string(),
+            std::fs::read_to_string(path)
+                .map_err(|e| anyhow::anyhow!("cannot read {}: {e}", path.display()))?,
+        )),
+        None => None,
+    };
+    println!("chute problem: {}", chute::DESCRIPTION);
+    for &n in counts {
+        let (pool, n) = pool(Some(n))?;
+        let r = pool.install(|| -> Result<_> {
+            let mut sim = match &text {
+                Some((shown, t)) => chute::from_lammps_data(t)
+                    .map_err(|e| anyhow::anyhow!("--lammps-data {shown}: {e}"))?,
+                None => chute::chute_problem(),
+            };
+            sim.neighbors.skin = skin;
+            Ok(rheodem::bench::run_timed(&mut sim, warmup, steps))
+        })?;
+        print_report("chute", n, &r);
+    }
+    Ok(())
+}
+
+/// The timing of one run and its throughput line (read by benches/peers/run.sh).
+fn print_report(name: &str, n: usize, r: &rheodem::bench::BenchReport) {
+    let total = r.loop_time.as_secs_f64();
+    let pct = |d: std::time::Duration| 100.0 * d.as_secs_f64() / total;
+    println!(
+        "{name}, threads {n}: {} particles × {} steps in {:.3} s — neighbours {:.1} % (rebuilds {:.1} %: {}, {:.1} pairs/particle), forces {:.1} %, integration {:.1} %; P = {:.1}, Z = {:.2}",
+        r.particles,
+        r.steps,
+        total,
+        pct(r.neighbor_time),
+        pct(r.rebuild_time),
+        r.rebuilds,
+        r.pairs_per_particle,
+        pct(r.force_time),
+        pct(r.integrate_time),
+        r.pressure,
+        r.coordination
+    );
+    println!(
+        "throughput: {:.0} particle-steps/s ({:.2} M, {name}, threads {n})",
+        r.particle_steps_per_second(),
+        r.particle_steps_per_second() / 1e6
+    );
 }

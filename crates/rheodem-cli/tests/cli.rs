@@ -288,6 +288,34 @@ fn contact_tools_write_csv_and_svg() {
     let out = rheodem(&["contact", "equivalent", "--volume-nl", "75"]);
     assert!(out.status.success());
     assert!(String::from_utf8_lossy(&out.stdout).contains("0.2622"));
+    // Rabinovich's bridge: its curve drawn beside Willett's of the same γ, and its linear
+    // equivalents (docs/model.md §2.11: f_max 1.71e-4 N at 75 nl, above Willett's 1.30e-4).
+    let rabinovich = dir.join("rabinovich");
+    let out = rheodem(&[
+        "contact",
+        "curve",
+        "--law",
+        "rabinovich",
+        "--out",
+        &rabinovich.to_string_lossy(),
+    ]);
+    assert_success(&out);
+    let svg = std::fs::read_to_string(rabinovich.with_extension("svg")).expect("svg");
+    assert!(svg.contains("Willett"), "no Willett curve beside it");
+    let out = rheodem(&[
+        "contact",
+        "equivalent",
+        "--law",
+        "rabinovich",
+        "--volume-nl",
+        "75",
+    ]);
+    assert_success(&out);
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        text.contains("Rabinovich") && text.contains("1.7106e-4"),
+        "{text}"
+    );
     // Every registry's laws, with the adhesive laws' parameters.
     let out = rheodem(&["contact", "laws"]);
     assert_success(&out);
@@ -793,4 +821,40 @@ fn later_directories_replace_points_of_the_same_name() {
     );
     let out = rheodem(&["fit"]);
     assert!(!out.status.success(), "a directory is required");
+}
+
+/// `bench` takes the normal law and the chute problem, and refuses the options a problem
+/// does not have, naming them.
+#[test]
+fn bench_takes_its_problems_and_names_what_they_refuse() {
+    let out = rheodem(&[
+        "bench",
+        "--normal",
+        "hertz",
+        "--threads",
+        "1",
+        "--warmup",
+        "0",
+        "--steps",
+        "5",
+        "--cohesion",
+        "none",
+    ]);
+    assert_success(&out);
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        text.contains("hertz, frictional") && text.contains("throughput:"),
+        "{text}"
+    );
+    let out = rheodem(&["bench", "--problem", "chute", "--cohesion", "reversible"]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success() && err.contains("--cohesion"), "{err}");
+    let out = rheodem(&["bench", "--write-lammps-data", "x.data"]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        !out.status.success() && err.contains("--problem chute"),
+        "{err}"
+    );
+    let out = rheodem(&["bench", "--problem", "hopper"]);
+    assert!(!out.status.success());
 }

@@ -1088,4 +1088,37 @@ mod tests {
         );
         assert_eq!(surface_height(&[], &[], |_| true, 0.02, 0.1, 4e-3), None);
     }
+
+    /// In a periodic box: a flat layer of spheres on a grid gives its top; positions
+    /// outside the box wrap into its columns; a grain sitting higher in one of four columns
+    /// raises the mean by a quarter of its excess; bad arguments give none.
+    #[test]
+    fn surface_height_of_a_periodic_layer_is_its_mean_column_top() {
+        let (lo, l) = (DVec3::new(0.0, 0.0, 0.0), DVec3::new(4.0, 4.0, 0.0));
+        let mut pos: Vec<DVec3> = (0..4)
+            .flat_map(|i| (0..4).map(move |j| DVec3::new(i as f64 + 0.5, j as f64 + 0.5, 1.0)))
+            .collect();
+        let mut a = vec![0.5; pos.len()];
+        let h = |p: &[DVec3], a: &[f64]| surface_height_box(p, a, |_| true, lo, l, 2.0);
+        assert_eq!(h(&pos, &a), Some(1.5));
+        // The same layer shifted by whole box lengths: the same columns.
+        let shifted: Vec<DVec3> = pos
+            .iter()
+            .map(|p| *p + DVec3::new(-4.0, 8.0, 0.0))
+            .collect();
+        assert_eq!(h(&shifted, &a), Some(1.5));
+        pos.push(DVec3::new(0.5, 0.5, 3.0));
+        a.push(0.5);
+        assert_eq!(h(&pos, &a), Some(1.5 + 2.0 / 4.0));
+        assert_eq!(surface_height_box(&pos, &a, |_| false, lo, l, 2.0), None);
+        assert_eq!(
+            surface_height_box(&pos, &a[1..], |_| true, lo, l, 2.0),
+            None
+        );
+        assert_eq!(surface_height_box(&pos, &a, |_| true, lo, l, 0.0), None);
+        assert_eq!(
+            surface_height_box(&pos, &a, |_| true, lo, DVec3::ZERO, 2.0),
+            None
+        );
+    }
 }

@@ -1,8 +1,11 @@
-//! The standard throughput problem of `BENCHMARKS.md` (4096 polydisperse spheres at
-//! `φ = 0.62`, Hooke + tangential history, `μ = 0.5`, `dt = 3.2·10⁻⁴`, model units).
+//! The throughput problems of `BENCHMARKS.md`: the standard problem (4096 polydisperse
+//! spheres at `φ = 0.62`, Hooke + tangential history, `μ = 0.5`, `dt = 3.2·10⁻⁴`, model
+//! units), and LAMMPS's own granular benchmark, chute flow ([`chute`]).
 //!
-//! As in the LAMMPS input, the packing starts from the affine profile `v_x = γ̇ y` and is
+//! As in the LAMMPS input, the standard packing starts from the affine profile `v_x = γ̇ y` and is
 //! sheared at `γ̇ = 1` through Lees-Edwards boundaries (shear `x`, gradient `y`).
+
+pub mod chute;
 
 use crate::Simulation;
 pub use crate::contact::standard::{BENCH_STRENGTH, bench_adhesion, bench_law, bench_law_with};
@@ -21,7 +24,7 @@ at rate 1 from the affine profile v_x = y";
 /// The standard packing, `data/bench-packing.txt`, shipped with the crate: first line
 /// `# L <edge> N <count> phi <φ>`, then `diameter x y z` per sphere (density 1).
 /// `benches/peers/lammps_data.py` turns the same file into LAMMPS's data file.
-pub const PACKING: &str = include_str!("../data/bench-packing.txt");
+pub const PACKING: &str = include_str!("../../data/bench-packing.txt");
 
 /// Verlet skin of the standard problem (model units), as in the LAMMPS input.
 pub const DEFAULT_SKIN: f64 = 0.2;
