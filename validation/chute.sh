@@ -6,9 +6,10 @@
 # Usage: bash validation/chute.sh GROUP…
 #   settle   — one settled layer: 10 × 10 d_p, 20 d_p deep, the shear box's grains
 #              (d_p = 2.2 mm, ρ_p = 2000 kg/m³, k_n = 100 N/m, e = 0.8) at w = 1.5, μ_p = 0.5
-#   scan     — the dry layer tilted to 18–30° from it, 20 s of flow (about 1350 √(d_p/g)),
-#              averaged over the last 10 s: the steady range, the force balance at every
-#              angle, Bagnold's profile
+#   scan     — the dry layer tilted from it to 18, 21, 23 and 25°, 20 s of flow (about
+#              1350 √(d_p/g)), averaged over the last 10 s: the steady range, the force
+#              balance at every angle, Bagnold's profile
+#   scan-more — the same at 20, 22, 24, 26 and 28°
 #   box      — the shear box at μ_p = 0.5, w = 1.5, e = 0.8 at the bulk I and the
 #              mid-depth p* of the steady chute runs (ANGLES, default 21 23 25)
 #   cohesive — the reversible law with f_a^max/(m g) = 5 (k_c = k_n) at 26, 28 and 30°,
@@ -65,7 +66,9 @@ for group in "$@"; do
       "$BIN" chute --quiet --threads "$THREADS" "${LAYER[@]}" --angle-deg 0 --duration 0.05 \
         --average-from 0 --out "$OUT/settled" 2>&1 | tee "$OUT/settled.log" ;;
     scan)
-      for a in 18 20 21 22 23 24 25 26 28 30; do chute "dry-theta$a" "$a"; done ;;
+      for a in 18 21 23 25; do chute "dry-theta$a" "$a"; done ;;
+    scan-more)
+      for a in 20 22 24 26 28; do chute "dry-theta$a" "$a"; done ;;
     box)
       for a in ${ANGLES:-21 23 25}; do box "box-dry-theta$a" "dry-theta$a"; done ;;
     cohesive)
@@ -75,6 +78,6 @@ for group in "$@"; do
       done
       box "box-reversible5-theta${COHESIVE_ANGLE:-28}" "reversible5-theta${COHESIVE_ANGLE:-28}" \
         --cohesion ;;
-    *) echo "unknown group $group (settle, scan, box, cohesive)" >&2; exit 2 ;;
+    *) echo "unknown group $group (settle, scan, scan-more, box, cohesive)" >&2; exit 2 ;;
   esac
 done

@@ -307,7 +307,7 @@ mod tests {
         let p = &sim.particles;
         assert_eq!(p.len(), 32_800);
         assert_eq!(p.free_count(), 32_000);
-        assert!(sim.neighbors.len() > 0);
+        assert!(!sim.neighbors.is_empty());
         let data = lammps_data(&sim);
         assert!(data.contains("\n32800 atoms\n2 atom types\n"));
         let atoms: Vec<&str> = data
