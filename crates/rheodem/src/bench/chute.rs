@@ -115,9 +115,24 @@ pub fn stack() -> Simulation {
             }
         }
     }
+    assemble(
+        particles,
+        [Z_RANGE[0], Z_RANGE[1]],
+        [nx as f64 * SPACING, ny as f64 * SPACING],
+    )
+    .expect("the chute's box holds three cells along x and y")
+}
+
+/// The chute of `particles` in the box `[0, L_x) × [0, L_y) × [z_lo, z_hi]`, periodic along
+/// `x` and `y`, with the law, gravity, time step and skin of the problem.
+fn assemble(
+    particles: Particles,
+    z: [f64; 2],
+    lengths: [f64; 2],
+) -> Result<Simulation, crate::neighbor::NeighborError> {
     let domain = Domain::new(
-        DVec3::new(0.0, 0.0, Z_RANGE[0]),
-        DVec3::new(nx as f64 * SPACING, ny as f64 * SPACING, Z_RANGE[1]),
+        DVec3::new(0.0, 0.0, z[0]),
+        DVec3::new(lengths[0], lengths[1], z[1]),
         [true, true, false],
     );
     let theta = ANGLE_DEG.to_radians();
@@ -130,7 +145,6 @@ pub fn stack() -> Simulation {
         DT,
         SKIN,
     )
-    .expect("the chute's box holds three cells along x and y")
 }
 
 /// The state both codes time: the stack after it has fallen for [`PREPARE_STEPS`] steps.
@@ -277,22 +291,10 @@ pub fn from_lammps_data(text: &str) -> Result<Simulation, String> {
         }
         particles.push(sphere, density);
     }
-    let domain = Domain::new(
-        DVec3::new(bounds[0][0], bounds[1][0], bounds[2][0]),
-        DVec3::new(bounds[0][1], bounds[1][1], bounds[2][1]),
-        [true, true, false],
-    );
-    let theta = ANGLE_DEG.to_radians();
-    Simulation::new(
-        particles,
-        domain,
-        ContactTable::uniform(1, law()),
-        Vec::new(),
-        DVec3::new(theta.sin(), 0.0, -theta.cos()),
-        DT,
-        SKIN,
-    )
-    .map_err(|e| e.to_string())
+    if bounds[0][0] != 0.0 || bounds[1][0] != 0.0 {
+        return Err("the box must start at x = 0 and y = 0 (xlo, ylo)".into());
+    }
+    assemble(particles, bounds[2], [bounds[0][1], bounds[1][1]]).map_err(|e| e.to_string())
 }
 
 #[cfg(test)]

@@ -464,6 +464,20 @@ impl<S: SetUp> Driver<S> {
     }
 }
 
+/// The `summary.json` of the run directory `dir`, as the driver last wrote it.
+///
+/// # Errors
+/// [`RunError::Io`] when it cannot be read or is not JSON.
+pub fn read_summary(dir: &Path) -> Result<serde_json::Value, RunError> {
+    let path = dir.join("summary.json");
+    let text = std::fs::read_to_string(&path).map_err(io_err("read", &path))?;
+    serde_json::from_str(&text).map_err(|e| RunError::Io {
+        operation: "parse",
+        path: path.clone(),
+        source: e.into(),
+    })
+}
+
 /// Records a failure before any state existed: the summary already in `dir` (or a new
 /// one) with `"status": "failed"`, the error and `"failed_at": "start"`.
 fn write_failure_alone(dir: &Path, error: &RunError) -> Result<(), RunError> {

@@ -48,6 +48,7 @@ use crate::setups::runner::{Event, Experiment, Finished, RunOptions};
 use crate::setups::schema::{
     Field, Range, SetUpSchema, Values, check_table, overlay, spec_changes, table_of,
 };
+use crate::setups::split_bottom::spec::mean_radius_cubed;
 use crate::setups::studied::Studied;
 use crate::setups::study::{Report, StudySpec};
 use crate::setups::sweep::{PointStatus, SweepSpec, point_tables};
@@ -328,14 +329,6 @@ impl ChuteSpec {
             radii: [r_min, r_max],
             range,
         })
-    }
-}
-
-fn mean_radius_cubed(r1: f64, r2: f64) -> f64 {
-    if r2 > r1 {
-        (r2.powi(4) - r1.powi(4)) / (4.0 * (r2 - r1))
-    } else {
-        r1.powi(3)
     }
 }
 
@@ -1682,13 +1675,7 @@ impl Experiment for ChuteSpec {
                     .into(),
             );
         }
-        let path = dir.join("summary.json");
-        let text = std::fs::read_to_string(&path).map_err(io_err("read", &path))?;
-        let summary = serde_json::from_str(&text).map_err(|e| RunError::Io {
-            operation: "parse",
-            path: path.clone(),
-            source: e.into(),
-        })?;
+        let summary = crate::driver::read_summary(dir)?;
         Ok(Finished {
             summary,
             report: report(&run, results.as_ref(), dir),

@@ -34,7 +34,7 @@ mod open;
 mod outputs;
 mod runner;
 mod schema;
-mod spec;
+pub(crate) mod spec;
 mod stages;
 mod state;
 

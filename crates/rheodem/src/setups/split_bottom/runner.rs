@@ -9,7 +9,7 @@ use super::spec::SplitBottomSpec;
 use super::stages::SplitBottomRun;
 use super::state::Stage;
 use crate::analysis::Estimate;
-use crate::run::{RunError, io_err};
+use crate::run::RunError;
 use crate::scenario::ScenarioError;
 use crate::setups::results_db::ResultsDb;
 use crate::setups::runner::{Event, Experiment, Finished, RunOptions};
@@ -73,13 +73,7 @@ impl Experiment for SplitBottomSpec {
                 break;
             }
         }
-        let path = dir.join("summary.json");
-        let text = std::fs::read_to_string(&path).map_err(io_err("read", &path))?;
-        let summary = serde_json::from_str(&text).map_err(|e| RunError::Io {
-            operation: "parse",
-            path: path.clone(),
-            source: e.into(),
-        })?;
+        let summary = crate::driver::read_summary(dir)?;
         Ok(Finished {
             summary,
             report: report(&run, dir),

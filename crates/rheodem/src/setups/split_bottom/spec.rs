@@ -460,7 +460,8 @@ impl SplitBottomSpec {
     }
 }
 
-fn mean_radius_cubed(r1: f64, r2: f64) -> f64 {
+/// The mean of `r³` over radii uniform in `[r1, r2]` (m³).
+pub(crate) fn mean_radius_cubed(r1: f64, r2: f64) -> f64 {
     if r2 > r1 {
         (r2.powi(4) - r1.powi(4)) / (4.0 * (r2 - r1))
     } else {
