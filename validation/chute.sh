@@ -9,11 +9,12 @@
 #   scan     — the dry layer tilted from it to 18, 21, 23 and 25°, 20 s of flow (about
 #              1350 √(d_p/g)), averaged over the last 10 s: the steady range, the force
 #              balance at every angle, Bagnold's profile
-#   scan-more — the same at 20, 22, 24, 26 and 28°
+#   scan-more — the same at 24, 26, 22, 20 and 28°
 #   box      — the shear box at μ_p = 0.5, w = 1.5, e = 0.8 at the bulk I and the
-#              mid-depth p* of the steady chute runs (ANGLES, default 21 23 25)
-#   cohesive — the reversible law with f_a^max/(m g) = 5 (k_c = k_n) at 26, 28 and 30°,
-#              and the shear box at the steady one's bulk I, mid-depth p* and Bo
+#              mid-depth p* of steady chute runs (ANGLES, default 23 24 25)
+#   cohesive — the reversible law with f_a^max/(m g) = 5 (k_c = k_n) at 26, 28 and 30°
+#   box-cohesive — the shear box at the bulk I, mid-depth p* and Bo of the steady cohesive
+#              run at COHESIVE_ANGLE (default 28)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 COMMIT=162ad59
@@ -68,16 +69,17 @@ for group in "$@"; do
     scan)
       for a in 18 21 23 25; do chute "dry-theta$a" "$a"; done ;;
     scan-more)
-      for a in 20 22 24 26 28; do chute "dry-theta$a" "$a"; done ;;
+      for a in 24 26 22 20 28; do chute "dry-theta$a" "$a"; done ;;
     box)
-      for a in ${ANGLES:-21 23 25}; do box "box-dry-theta$a" "dry-theta$a"; done ;;
+      for a in ${ANGLES:-23 24 25}; do box "box-dry-theta$a" "dry-theta$a"; done ;;
     cohesive)
       for a in 26 28 30; do
         chute "reversible5-theta$a" "$a" --law reversible --max-force "$FMAX" \
           --adhesive-stiffness 100
-      done
+      done ;;
+    box-cohesive)
       box "box-reversible5-theta${COHESIVE_ANGLE:-28}" "reversible5-theta${COHESIVE_ANGLE:-28}" \
         --cohesion ;;
-    *) echo "unknown group $group (settle, scan, scan-more, box, cohesive)" >&2; exit 2 ;;
+    *) echo "unknown group $group (settle, scan, scan-more, box, cohesive, box-cohesive)" >&2; exit 2 ;;
   esac
 done
