@@ -757,7 +757,7 @@ fn setups_lists_the_set_ups_and_their_parameters() {
     assert_success(&out);
     let list = String::from_utf8_lossy(&out.stdout);
     assert!(
-        list.contains("shear-box") && list.contains("split-bottom"),
+        list.contains("shear-box") && list.contains("split-bottom") && list.contains("chute"),
         "{list}"
     );
     let out = rheodem(&["setups", "split-bottom"]);
@@ -770,10 +770,13 @@ fn setups_lists_the_set_ups_and_their_parameters() {
         .unwrap_or_else(|| panic!("no mu_p row: {table}"));
     assert!(row.ends_with(&format!("| {default} |")), "{row}");
     let out = rheodem(&["setups", "chute"]);
+    assert_success(&out);
+    assert!(String::from_utf8_lossy(&out.stdout).contains("| `angle_deg` |"));
+    let out = rheodem(&["setups", "hopper"]);
     assert!(!out.status.success());
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(
-        err.contains("`chute` is not a set-up; known: shear-box, split-bottom"),
+        err.contains("`hopper` is not a set-up; known: shear-box, split-bottom, chute"),
         "{err}"
     );
 }
