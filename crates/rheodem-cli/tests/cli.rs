@@ -861,3 +861,66 @@ fn bench_takes_its_problems_and_names_what_they_refuse() {
     let out = rheodem(&["bench", "--problem", "hopper"]);
     assert!(!out.status.success());
 }
+
+/// `bench` saves a warmed-up state and times it again on any thread count, the members
+/// of a team in turn included; it refuses thread counts past its range and options a
+/// loaded state already fixes, naming them.
+#[test]
+fn bench_saves_a_state_and_times_it_on_many_threads() {
+    let dir = temp("bench-state");
+    std::fs::create_dir_all(&dir).expect("a temporary directory");
+    let state = dir.join("state.bin");
+    let state = state.to_str().expect("a UTF-8 temporary path");
+    let out = rheodem(&[
+        "bench",
+        "--threads",
+        "1",
+        "--cohesion",
+        "none",
+        "--warmup",
+        "5",
+        "--save-state",
+        state,
+    ]);
+    assert_success(&out);
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(text.contains("4096 particles at step 5"), "{text}");
+    let out = rheodem(&[
+        "bench",
+        "--threads",
+        "1,3",
+        "--members-in-turn",
+        "--load-state",
+        state,
+        "--warmup",
+        "0",
+        "--steps",
+        "3",
+    ]);
+    assert_success(&out);
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        text.contains("state, threads 1:") && text.contains("state, threads 3:"),
+        "{text}"
+    );
+    for (args, named) in [
+        (vec!["--threads", "0"], "--threads 0"),
+        (vec!["--threads", "2000"], "--threads 2000"),
+        (
+            vec!["--load-state", state, "--cohesion", "reversible"],
+            "--cohesion",
+        ),
+        (
+            vec!["--problem", "chute", "--replicate", "2"],
+            "--replicate",
+        ),
+    ] {
+        let out = rheodem(&[&["bench"], &args[..]].concat());
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(
+            !out.status.success() && err.contains(named),
+            "{args:?}: {err}"
+        );
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}

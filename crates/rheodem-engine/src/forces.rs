@@ -1,13 +1,13 @@
 //! The parallel pair-force loop.
 //!
 //! Scheme: a half Verlet list, split into as many contiguous slot ranges ("chunks") as the
-//! [`Team`] has members, balanced by pair count. Each chunk accumulates forces and
-//! torques of both partners into its own buffer (chunk 0 directly into the particle
-//! arrays); the buffers are then added into the particle arrays slot by slot in chunk order.
-//! Each pair is evaluated once (half the work of a full list) and writes need no atomics or
-//! colouring; the ordered reduction makes a run bit-identical for a given thread count,
-//! whichever thread runs which chunk. The price is one extra buffer pass per extra
-//! thread, small against the pair work on a few cores.
+//! [`Team`] has members, balanced by pair count. Each pair is evaluated once (half the
+//! work of a full list), by the chunk of its first slot; a chunk adds forces and torques
+//! into its own slots of the particle arrays and into buffers for the slots of later
+//! chunks its pairs reach, which are then gathered in chunk order ([`crate::halo`]). Writes
+//! need no atomics or colouring, the ordered gathering makes a run bit-identical for a
+//! given thread count, whichever thread runs which chunk, and the extra work per chunk is
+//! its halo, not the particle count.
 //!
 //! A partner seen through a rotated image (a wedge face) receives the reaction rotated back
 //! into its own frame, `−Rᵀ f` and `Rᵀ τ_j`. What is measured besides the forces is up to
@@ -19,18 +19,29 @@ use crate::contact::normal::{NormalForce, WithNormal};
 use crate::contact::spring::{SpringModel, WithSpring};
 use crate::contact::{ContactTable, HistoryView, PairForce, PairKernel, PairKinematics};
 use crate::domain::{IDENTITY_IMAGE, IMAGE_COUNT, ImageTransform};
-use crate::integrate::PARTICLES_PER_TASK;
+use crate::halo::{ForceSink, Gathering, Halo, gather};
 use crate::neighbor::NeighborList;
 use crate::observe::{ContactObserver, ContactView};
 use crate::particles::Particles;
 use crate::team::Team;
 use glam::{DMat3, DVec3};
 
-/// Per-thread force buffers, reused between steps (not part of the simulation state).
+/// Per-chunk buffers of the pair loop, reused between steps (not part of the simulation
+/// state).
 #[derive(Clone, Debug, Default)]
 pub struct ForceScratch {
-    force: Vec<Vec<DVec3>>,
-    torque: Vec<Vec<DVec3>>,
+    /// Per chunk: the slots of later chunks its pairs reach.
+    halos: Vec<Halo>,
+    /// The list structure ([`crate::neighbor::PairSlices::structure`]) and chunk bounds the
+    /// halos were found for.
+    halos_for: (u64, Vec<usize>),
+    /// Per chunk: the sums of forces (N) and torques (N m) on its halo.
+    halo_force: Vec<Vec<DVec3>>,
+    halo_torque: Vec<Vec<DVec3>>,
+    /// Per chunk: scratch of the gathering ([`crate::halo::gather`]).
+    gathering: Vec<Gathering>,
+    /// Scratch of [`Halo::of`].
+    reached: Vec<u32>,
     found: Vec<Found>,
 }
 
@@ -185,31 +196,55 @@ fn pair_forces_in<O: ContactObserver>(
         prune: (slices.prune.stamp, slices.prune.margin),
     };
 
-    // Each chunk zeroes the part of its buffers it can write (the slots from its first
-    // one on, as every pair `i < j` has `i` in the chunk) inside its own task.
-    scratch.force.resize_with(chunks - 1, Vec::new);
-    scratch.torque.resize_with(chunks - 1, Vec::new);
+    // The halos, found again whenever the list's structure or the chunks change.
+    if scratch.halos_for.0 != slices.structure || scratch.halos_for.1 != bounds {
+        scratch.halos = bounds
+            .windows(2)
+            .map(|b| {
+                let pairs = inputs.offsets[b[0]] as usize..inputs.offsets[b[1]] as usize;
+                Halo::of(&inputs.partner[pairs], b[1], &mut scratch.reached)
+            })
+            .collect();
+        scratch.halos_for = (slices.structure, bounds.clone());
+    }
     scratch.found.resize_with(chunks, Found::default);
-    for buf in scratch.force.iter_mut().chain(scratch.torque.iter_mut()) {
-        buf.resize(n, DVec3::ZERO);
+    scratch.halo_force.resize_with(chunks, Vec::new);
+    scratch.halo_torque.resize_with(chunks, Vec::new);
+    scratch.gathering.resize_with(chunks, Gathering::default);
+    for ((halo, f), t) in scratch
+        .halos
+        .iter()
+        .zip(&mut scratch.halo_force)
+        .zip(&mut scratch.halo_torque)
+    {
+        f.resize(halo.len(), DVec3::ZERO);
+        t.resize(halo.len(), DVec3::ZERO);
     }
 
-    // Carve the history into one disjoint slice per chunk.
+    // Carve the history and the particles' forces and torques into one disjoint slice per
+    // chunk; each chunk zeroes its slices and its halo buffers inside its own task.
     let mut jobs = Vec::with_capacity(chunks);
     let (mut active, mut history) = (slices.active, slices.history);
-    let mut force_bufs = std::iter::once(&mut particles.force).chain(scratch.force.iter_mut());
-    let mut torque_bufs = std::iter::once(&mut particles.torque).chain(scratch.torque.iter_mut());
-    for c in 0..chunks {
+    let mut own_force = own_slots(&mut particles.force, &bounds).into_iter();
+    let mut own_torque = own_slots(&mut particles.torque, &bounds).into_iter();
+    let mut halo_force = scratch.halo_force.iter_mut();
+    let mut halo_torque = scratch.halo_torque.iter_mut();
+    for (c, halo) in scratch.halos.iter().enumerate() {
         let (lo, hi) = (bounds[c], bounds[c + 1]);
         let pairs = (inputs.offsets[hi] - inputs.offsets[lo]) as usize;
         let (t_here, t_rest) = std::mem::take(&mut active).split_at_mut(pairs);
         let (h_here, h_rest) = std::mem::take(&mut history).split_at(pairs);
         active = t_rest;
         history = h_rest;
-        let (Some(f), Some(t)) = (force_bufs.next(), torque_bufs.next()) else {
-            unreachable!("one buffer per chunk");
+        let (Some(f), Some(t), Some(hf), Some(ht)) = (
+            own_force.next(),
+            own_torque.next(),
+            halo_force.next(),
+            halo_torque.next(),
+        ) else {
+            unreachable!("one slice and one halo buffer per chunk");
         };
-        jobs.push((lo..hi, t_here, h_here, f, t));
+        jobs.push((lo..hi, t_here, h_here, (f, t, halo, hf, ht)));
     }
     let mut jobs: Vec<_> = jobs
         .into_iter()
@@ -218,42 +253,32 @@ fn pair_forces_in<O: ContactObserver>(
         .collect();
     team.for_each(
         &mut jobs,
-        |((range, active, history, force, torque), found, out)| {
-            force[range.start..].fill(DVec3::ZERO);
-            torque[range.start..].fill(DVec3::ZERO);
-            *out = chunk_forces::<O>(
-                &inputs,
-                range.clone(),
-                active,
-                history,
-                force,
-                torque,
-                found,
-            );
+        |((range, active, history, (force, torque, halo, hf, ht)), found, out)| {
+            let sink = ForceSink::zeroed(range.start, force, torque, halo, hf, ht);
+            *out = chunk_forces::<O>(&inputs, range.clone(), active, history, sink, found);
         },
     );
     let partial: Vec<O> = jobs.into_iter().map(|(_, _, out)| out).collect();
 
     if chunks > 1 {
-        // Chunk `c` wrote only the slots from `bounds[c]` on: nothing to add before
-        // `bounds[1]`.
-        let (extra_f, extra_t, first) = (&scratch.force, &scratch.torque, bounds[1]);
-        let len = team.piece_len(n - first, PARTICLES_PER_TASK);
-        let mut pieces: Vec<_> = particles.force[first..]
-            .chunks_mut(len)
-            .zip(particles.torque[first..].chunks_mut(len))
-            .enumerate()
+        // Each chunk past the first gathers the halo sums of the earlier ones.
+        let halos = &scratch.halos;
+        let buffers: Vec<(&[DVec3], &[DVec3])> = scratch
+            .halo_force
+            .iter()
+            .zip(&scratch.halo_torque)
+            .map(|(f, t)| (&f[..], &t[..]))
             .collect();
-        team.for_each(&mut pieces, |(piece, (f, t))| {
-            let offset = first + *piece * len;
-            for ((bf, bt), &start) in extra_f.iter().zip(extra_t).zip(&bounds[1..]) {
-                // Slots before `start` hold nothing from this buffer.
-                let from = start.saturating_sub(offset).min(f.len());
-                for k in from..f.len() {
-                    f[k] += bf[offset + k];
-                    t[k] += bt[offset + k];
-                }
-            }
+        let mut gathers: Vec<_> = own_slots(&mut particles.force, &bounds)
+            .into_iter()
+            .zip(own_slots(&mut particles.torque, &bounds))
+            .zip(scratch.gathering.iter_mut())
+            .enumerate()
+            .skip(1)
+            .collect();
+        team.for_each(&mut gathers, |(c, ((force, torque), sum))| {
+            let c = *c;
+            gather(bounds[c], force, torque, &halos[..c], &buffers[..c], sum);
         });
     }
 
@@ -262,6 +287,18 @@ fn pair_forces_in<O: ContactObserver>(
         total.merge(p);
     }
     total
+}
+
+/// `values` split into the chunks' own slots, `bounds[c]..bounds[c + 1]` for chunk `c`.
+fn own_slots<'a>(mut values: &'a mut [DVec3], bounds: &[usize]) -> Vec<&'a mut [DVec3]> {
+    bounds
+        .windows(2)
+        .map(|b| {
+            let (here, rest) = std::mem::take(&mut values).split_at_mut(b[1] - b[0]);
+            values = rest;
+            here
+        })
+        .collect()
 }
 
 /// A list pair within reach, found by the first pass of [`chunk_forces`].
@@ -290,18 +327,15 @@ fn chunk_forces<O: ContactObserver>(
     range: std::ops::Range<usize>,
     active: &mut [bool],
     history: &mut HistoryView<'_>,
-    force: &mut [DVec3],
-    torque: &mut [DVec3],
+    sink: ForceSink<'_>,
     found: &mut Found,
 ) -> O {
     #[cfg(target_arch = "x86_64")]
     if !inp.plain && std::arch::is_x86_feature_detected!("avx2") {
         // SAFETY: the CPU supports AVX2, checked just above.
-        return unsafe {
-            chunk_forces_avx2::<O>(inp, range, active, history, force, torque, found)
-        };
+        return unsafe { chunk_forces_avx2::<O>(inp, range, active, history, sink, found) };
     }
-    chunk_forces_generic::<O, false>(inp, range, active, history, force, torque, found)
+    chunk_forces_generic::<O, false>(inp, range, active, history, sink, found)
 }
 
 /// [`chunk_forces_generic`] compiled with AVX2.
@@ -312,11 +346,10 @@ fn chunk_forces_avx2<O: ContactObserver>(
     range: std::ops::Range<usize>,
     active: &mut [bool],
     history: &mut HistoryView<'_>,
-    force: &mut [DVec3],
-    torque: &mut [DVec3],
+    sink: ForceSink<'_>,
     found: &mut Found,
 ) -> O {
-    chunk_forces_generic::<O, true>(inp, range, active, history, force, torque, found)
+    chunk_forces_generic::<O, true>(inp, range, active, history, sink, found)
 }
 
 /// With `AVX` (which the CPU must have) the law's lane groups are put together in
@@ -327,8 +360,7 @@ fn chunk_forces_generic<O: ContactObserver, const AVX: bool>(
     range: std::ops::Range<usize>,
     active: &mut [bool],
     history: &mut HistoryView<'_>,
-    force: &mut [DVec3],
-    torque: &mut [DVec3],
+    sink: ForceSink<'_>,
     found: &mut Found,
 ) -> O {
     let mut obs = O::default();
@@ -470,17 +502,14 @@ fn chunk_forces_generic<O: ContactObserver, const AVX: bool>(
                 &touching[..n_touching],
                 active,
                 history,
-                force,
-                torque,
+                sink,
                 &mut obs,
             );
         }
     } else {
         for batch in touching[..n_touching].chunks(LANES) {
             if same_kernel(batch) {
-                touching_pairs::<O, AVX>(
-                    inp, within, batch, active, history, force, torque, &mut obs,
-                );
+                touching_pairs::<O, AVX>(inp, within, batch, active, history, sink, &mut obs);
             } else {
                 for q in batch {
                     touching_pairs::<O, AVX>(
@@ -489,8 +518,7 @@ fn chunk_forces_generic<O: ContactObserver, const AVX: bool>(
                         std::slice::from_ref(q),
                         active,
                         history,
-                        force,
-                        torque,
+                        sink,
                         &mut obs,
                     );
                 }
@@ -506,8 +534,7 @@ fn chunk_forces_generic<O: ContactObserver, const AVX: bool>(
                 batch,
                 active,
                 history,
-                force,
-                torque,
+                sink,
                 &mut obs,
             );
         } else {
@@ -519,8 +546,7 @@ fn chunk_forces_generic<O: ContactObserver, const AVX: bool>(
                     std::slice::from_ref(q),
                     active,
                     history,
-                    force,
-                    torque,
+                    sink,
                     &mut obs,
                 );
             }
@@ -977,22 +1003,21 @@ impl Inputs<'_> {
 /// Adds the forces of `pf` on `i` and (through the image) on `j`.
 ///
 /// # Safety
-/// `i` and `j` are below the lengths of `force` and `torque`.
+/// `i` is one of the sink's own slots, `j` one of them or in its halo.
 #[inline(always)]
 unsafe fn add_pair(
-    force: &mut [DVec3],
-    torque: &mut [DVec3],
+    sink: ForceSink<'_>,
     image: &ImageTransform,
     i: usize,
     j: usize,
     pf: &PairForce,
 ) {
     // SAFETY: the caller's contract.
-    let (f_i, t_i) = unsafe { (at_mut(force, i), at_mut(torque, i)) };
+    let (f_i, t_i) = unsafe { sink.own(i) };
     *f_i += pf.force;
     *t_i += pf.torque_i;
     // SAFETY: the caller's contract.
-    let (f_j, t_j) = unsafe { (at_mut(force, j), at_mut(torque, j)) };
+    let (f_j, t_j) = unsafe { sink.slot(j) };
     if image.rotation.is_none() {
         *f_j -= pf.force;
         *t_j += pf.torque_j;
@@ -1014,8 +1039,7 @@ fn apart_batch<O: ContactObserver, const AVX: bool>(
     batch: &[u32],
     active: &mut [bool],
     history: &mut HistoryView<'_>,
-    force: &mut [DVec3],
-    torque: &mut [DVec3],
+    sink: ForceSink<'_>,
     obs: &mut O,
 ) {
     let c = lanes_of(within, batch);
@@ -1081,7 +1105,7 @@ fn apart_batch<O: ContactObserver, const AVX: bool>(
         let image = &inp.images[c.code as usize];
         // SAFETY: the pair was found in a list that fits the particles, and `force` and
         // `torque` hold one entry per particle (checked by `pair_forces`).
-        unsafe { add_pair(force, torque, image, i, j, &pf) };
+        unsafe { add_pair(sink, image, i, j, &pf) };
         if O::OBSERVES {
             obs.visit(&ContactView {
                 ids: [inp.id[i], inp.id[j]],
@@ -1109,8 +1133,7 @@ fn touching_pairs<O: ContactObserver, const AVX: bool>(
     pairs: &[u32],
     active: &mut [bool],
     history: &mut HistoryView<'_>,
-    force: &mut [DVec3],
-    torque: &mut [DVec3],
+    sink: ForceSink<'_>,
     obs: &mut O,
 ) {
     let kernel = inp.kernel_of(&within[pairs[0] as usize]);
@@ -1121,27 +1144,25 @@ fn touching_pairs<O: ContactObserver, const AVX: bool>(
         pairs,
         active,
         history,
-        force,
-        torque,
+        sink,
         obs,
     });
 }
 
 /// Touching pairs with the same kernel, evaluated lane group by lane group with the
 /// kernel's normal law as its own type ([`WithNormal`]).
-struct Touches<'a, 'h, O, const AVX: bool> {
+struct Touches<'a, 'h, 's, O, const AVX: bool> {
     inp: &'a Inputs<'a>,
     kernel: &'a PairKernel,
     within: &'a [Candidate],
     pairs: &'a [u32],
     active: &'a mut [bool],
     history: &'a mut HistoryView<'h>,
-    force: &'a mut [DVec3],
-    torque: &'a mut [DVec3],
+    sink: ForceSink<'s>,
     obs: &'a mut O,
 }
 
-impl<O: ContactObserver, const AVX: bool> WithNormal for Touches<'_, '_, O, AVX> {
+impl<O: ContactObserver, const AVX: bool> WithNormal for Touches<'_, '_, '_, O, AVX> {
     type Output = ();
 
     #[inline(always)]
@@ -1156,13 +1177,13 @@ impl<O: ContactObserver, const AVX: bool> WithNormal for Touches<'_, '_, O, AVX>
 
 /// [`Touches`] with the kernel's normal law as its own type, evaluated with its sliding
 /// spring as its own type ([`WithSpring`]).
-struct TouchesWith<'a, 'h, 'n, O, const AVX: bool, N> {
-    touches: Touches<'a, 'h, O, AVX>,
+struct TouchesWith<'a, 'h, 's, 'n, O, const AVX: bool, N> {
+    touches: Touches<'a, 'h, 's, O, AVX>,
     normal: &'n N,
 }
 
 impl<O: ContactObserver, const AVX: bool, N: NormalForce> WithSpring
-    for TouchesWith<'_, '_, '_, O, AVX, N>
+    for TouchesWith<'_, '_, '_, '_, O, AVX, N>
 {
     type Output = ();
 
@@ -1179,8 +1200,7 @@ impl<O: ContactObserver, const AVX: bool, N: NormalForce> WithSpring
                 batch,
                 t.active,
                 t.history,
-                t.force,
-                t.torque,
+                t.sink,
                 t.obs,
             );
         }
@@ -1201,8 +1221,7 @@ fn touch_batch<O: ContactObserver, const AVX: bool, N: NormalForce, S: SpringMod
     batch: &[u32],
     active: &mut [bool],
     history: &mut HistoryView<'_>,
-    force: &mut [DVec3],
-    torque: &mut [DVec3],
+    sink: ForceSink<'_>,
     obs: &mut O,
 ) {
     let mut springs = HistoryLanes::<F4>::default();
@@ -1312,7 +1331,7 @@ fn touch_batch<O: ContactObserver, const AVX: bool, N: NormalForce, S: SpringMod
         let image = &inp.images[c.code as usize];
         // SAFETY: `i` and `j` are slots, and `force` and `torque` hold one entry per
         // particle (checked by `pair_forces`).
-        unsafe { add_pair(force, torque, image, i, j, &pf) };
+        unsafe { add_pair(sink, image, i, j, &pf) };
         if O::OBSERVES {
             let kin = PairKinematics {
                 normal: pair.normal.lane(l),

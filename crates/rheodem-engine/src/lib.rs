@@ -59,6 +59,7 @@ mod displacement;
 pub mod domain;
 pub mod forces;
 pub mod generate;
+mod halo;
 pub mod integrate;
 pub mod measure;
 pub mod memory;

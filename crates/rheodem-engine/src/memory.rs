@@ -12,8 +12,10 @@ use std::fmt;
 /// more pairs per particle, so the estimate takes 4 kB.
 pub const BYTES_PER_PARTICLE: u64 = 4096;
 
-/// Estimated bytes per particle and extra worker thread (the per-thread force and torque
-/// buffers, `2 × 3 × 8` bytes, with room for the buffers' halo bookkeeping).
+/// Estimated bytes per particle and extra worker thread: an upper bound on what grows with
+/// the thread count (each thread's table of the history carried over a rebuild, one count
+/// per particle, and the force and torque buffers of a chunk's halo, `2 × 3 × 8` bytes per
+/// halo slot, a halo being at most a layer of cells; see `crate::halo`).
 pub const BYTES_PER_PARTICLE_THREAD: u64 = 64;
 
 /// Fixed memory of a run besides its particles (program, thread stacks, tables).

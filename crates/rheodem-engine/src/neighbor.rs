@@ -67,6 +67,9 @@ pub fn min_wedge_angle(radius: f64, reach: f64) -> Option<f64> {
     (radius > 0.0 && s <= 1.0).then(|| 2.0 * s.asin())
 }
 
+/// The process-wide source of list structure stamps (from 1: zero is none).
+static NEXT_STRUCTURE: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(1);
+
 /// Particles per block of the parallel neighbour build.
 const BUILD_BLOCK: usize = 256;
 
@@ -112,6 +115,11 @@ pub struct NeighborList {
     /// the row offsets, so that the force loop walks the pairs in one flat loop.
     #[serde(skip)]
     first: Vec<u32>,
+    /// A process-unique stamp of the pair structure `first` was written for, so that what
+    /// the force loop derives from the structure (its chunks' halos) is never taken for
+    /// another list's or an older build's.
+    #[serde(skip)]
+    structure: u64,
     /// Which pairs the force loop scans ([`crate::prune`]).
     #[serde(skip)]
     prune: PrunePlan,
@@ -146,6 +154,9 @@ pub struct PairSlices<'a> {
     pub history: HistoryView<'a>,
     /// Which pairs the force loop scans.
     pub prune: &'a PrunePlan,
+    /// A process-unique stamp of the list's pair structure (it changes with every build
+    /// and every check by [`NeighborList::fits`] that rewrites the rows).
+    pub structure: u64,
 }
 
 impl NeighborList {
@@ -203,6 +214,7 @@ impl NeighborList {
                 self.first.extend(std::iter::repeat_n(i as u32, len));
             }
             self.fits_count = Some(n);
+            self.structure = NEXT_STRUCTURE.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
         }
         fits
     }
@@ -217,6 +229,7 @@ impl NeighborList {
             active: &mut self.active,
             history: self.history.view(),
             prune: &self.prune,
+            structure: self.structure,
         }
     }
 

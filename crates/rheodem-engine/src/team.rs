@@ -1,7 +1,7 @@
 //! A team of threads that stays awake between the parallel loops of a step.
 //!
 //! A step has five short parallel loops (half kick and drift, the skin check, the pair
-//! forces, the reduction of the force buffers, the second half kick), each of tens to
+//! forces, the gathering of the chunks' halo buffers, the second half kick), each of tens to
 //! hundreds of microseconds on a few thousand particles. Handing a loop to rayon's pool
 //! costs a wake-up of its sleeping threads each time, measured at 15–40 µs per
 //! `rayon::join` on a 2-core virtual machine — as much as the loop itself. A [`Team`]
@@ -26,10 +26,26 @@ const SPIN: Duration = Duration::from_micros(100);
 /// Spins between looks at the clock (or, for the caller, between yields).
 const SPINS_PER_LOOK: u32 = 64;
 
-/// A team of `threads` members: the calling thread and `threads − 1` worker threads.
+/// Whether teams made from now on run their members' parts in turn on the calling thread.
+static IN_TURN: AtomicBool = AtomicBool::new(false);
+
+/// Makes the teams made from now on run the parts of their members one after another on
+/// the calling thread (`true`) instead of on worker threads: the same split of the work and
+/// the same bits, without the hand-overs between threads. For counting the instructions of
+/// a thread count under valgrind, which runs threads one at a time and would count the
+/// members' spin-waits as work.
+pub fn set_members_in_turn(on: bool) {
+    IN_TURN.store(on, Ordering::Relaxed);
+}
+
+/// A team of `threads` members: the calling thread and `threads − 1` worker threads (or,
+/// after [`set_members_in_turn`], the calling thread alone, taking each member's part in
+/// turn).
 pub struct Team {
     shared: Arc<Shared>,
     workers: Vec<JoinHandle<()>>,
+    /// Members, the calling thread included.
+    members: usize,
 }
 
 /// The job of the current generation, type-erased: `call(data, member)`.
@@ -64,7 +80,13 @@ struct Shared {
 impl Team {
     /// A team of `threads` members (at least one: the calling thread alone, no workers).
     pub fn new(threads: usize) -> Team {
-        let workers = threads.max(1) - 1;
+        Team::made(threads, IN_TURN.load(Ordering::Relaxed))
+    }
+
+    /// A team of `threads` members, with worker threads unless `in_turn`.
+    fn made(threads: usize, in_turn: bool) -> Team {
+        let members = threads.max(1);
+        let workers = if in_turn { 0 } else { members - 1 };
         let shared = Arc::new(Shared {
             generation: AtomicU64::new(0),
             job: Mutex::new(None),
@@ -83,18 +105,23 @@ impl Team {
                     .expect("the operating system starts a team thread")
             })
             .collect();
-        Team { shared, workers }
+        Team {
+            shared,
+            workers,
+            members,
+        }
     }
 
     /// Members of the team, the calling thread included.
     pub fn threads(&self) -> usize {
-        self.workers.len() + 1
+        self.members
     }
 
     /// Runs `f(t)` once for every member `t` in `0..threads()` (member 0 on the calling
     /// thread) and returns when all have finished. A panic in any member is raised again
     /// here. A call made while the team is busy (from inside a job, or from another
-    /// thread) runs every member's part on the calling thread, in order.
+    /// thread), or by a team without worker threads, runs every member's part on the
+    /// calling thread, in order.
     pub fn run<F: Fn(usize) + Sync>(&self, f: F) {
         let shared = &*self.shared;
         if self.workers.is_empty() || shared.busy.swap(true, Ordering::Acquire) {
@@ -334,6 +361,20 @@ mod tests {
             });
         });
         assert_eq!(count.load(Ordering::Relaxed), 4);
+    }
+
+    #[test]
+    fn members_in_turn_take_the_same_parts_on_the_calling_thread() {
+        let team = Team::made(4, true);
+        assert_eq!(team.threads(), 4);
+        assert!(team.workers.is_empty());
+        let caller = std::thread::current().id();
+        let mut items: Vec<(usize, Option<usize>)> = (0..10).map(|k| (k, None)).collect();
+        team.for_each(&mut items, |item| {
+            assert_eq!(std::thread::current().id(), caller);
+            item.1 = Some(item.0 + 1);
+        });
+        assert!(items.iter().all(|&(k, v)| v == Some(k + 1)));
     }
 
     #[test]

@@ -42,26 +42,50 @@ pub fn standard_problem_with(
     cohesion: LawKind,
     skin: f64,
 ) -> Simulation {
+    standard_problem_replicated(normal, shear_rate, cohesion, skin, 1)
+}
+
+/// [`standard_problem_with`] on the standard packing repeated `copies` times along each
+/// axis (`copies³ × 4096` spheres in a box `copies` times as wide), sheared at the same
+/// rate from the affine profile across the whole box: the larger problem of the thread
+/// scaling measurements (`copies = 2`: 32 768 spheres).
+///
+/// # Panics
+/// If `copies` is zero.
+pub fn standard_problem_replicated(
+    normal: NormalKind,
+    shear_rate: f64,
+    cohesion: LawKind,
+    skin: f64,
+    copies: usize,
+) -> Simulation {
+    assert!(copies > 0, "the packing is repeated at least once");
     let packing = parse_packing(PACKING).expect("the shipped packing is valid");
     let edge = packing
         .box_edge
         .expect("the shipped packing has a box edge");
     let mut particles = Particles::default();
-    for (d, r) in &packing.spheres {
-        particles.push(
-            Sphere {
-                position: *r,
-                velocity: DVec3::new(shear_rate * r.y, 0.0, 0.0),
-                angular_velocity: DVec3::ZERO,
-                radius: 0.5 * d,
-                species: 0,
-                motion: Motion::Free,
-            },
-            1.0,
-        );
+    for (a, b, c) in
+        (0..copies).flat_map(|a| (0..copies).flat_map(move |b| (0..copies).map(move |c| (a, b, c))))
+    {
+        let shift = edge * DVec3::new(a as f64, b as f64, c as f64);
+        for (d, r) in &packing.spheres {
+            let r = *r + shift;
+            particles.push(
+                Sphere {
+                    position: r,
+                    velocity: DVec3::new(shear_rate * r.y, 0.0, 0.0),
+                    angular_velocity: DVec3::ZERO,
+                    radius: 0.5 * d,
+                    species: 0,
+                    motion: Motion::Free,
+                },
+                1.0,
+            );
+        }
     }
-    let domain =
-        Domain::new(DVec3::ZERO, DVec3::splat(edge), [true; 3]).with_lees_edwards(shear_rate);
+    let domain = Domain::new(DVec3::ZERO, DVec3::splat(copies as f64 * edge), [true; 3])
+        .with_lees_edwards(shear_rate);
     Simulation::new(
         particles,
         domain,
