@@ -177,16 +177,27 @@ impl<'a> ForceSink<'a> {
     pub(crate) unsafe fn slot(self, k: usize) -> (&'a mut DVec3, &'a mut DVec3) {
         let (f, t) = if k < self.hi {
             self.own
-        } else if k < self.near_end {
+        } else {
+            self.halo_region(k)
+        };
+        // SAFETY: `k` lies in the region whose pointers were chosen (the caller's
+        // contract), which they reach at `k`; the slices are borrowed for `'a`.
+        unsafe { (&mut *f.wrapping_add(k), &mut *t.wrapping_add(k)) }
+    }
+
+    /// The pointers of the halo window holding slot `k`. Marked cold so that the pair
+    /// loop branches to it (most partners are the chunk's own) instead of selecting
+    /// between three regions on every write.
+    #[cold]
+    #[inline(always)]
+    fn halo_region(self, k: usize) -> (*mut DVec3, *mut DVec3) {
+        if k < self.near_end {
             debug_assert!(self.halo.near.contains(&k));
             self.near
         } else {
             debug_assert!(self.halo.far.contains(&k));
             self.far
-        };
-        // SAFETY: `k` lies in the region whose pointers were chosen (the caller's
-        // contract), which they reach at `k`; the slices are borrowed for `'a`.
-        unsafe { (&mut *f.wrapping_add(k), &mut *t.wrapping_add(k)) }
+        }
     }
 }
 
