@@ -1717,7 +1717,7 @@ mod tests {
         let images = Domain::new(DVec3::ZERO, DVec3::splat(6.0), [true; 3]).image_transforms();
         for (name, laws) in &tables {
             let species = |k: usize| (k % laws.species()) as u16;
-            for threads in [1, 2] {
+            for threads in [1, 2, 5] {
                 let mut rng = rand_xoshiro::Xoshiro256PlusPlus::seed_from_u64(11);
                 let (mut p, domain) = random_spheres(&mut rng);
                 for k in 0..p.len() {
